@@ -1,0 +1,19 @@
+"""The engine: construction plans, batched evaluation with derivatives, limits and circuits."""
+
+from linkwright.engine.circuits import InputArcs, input_arcs, trace
+from linkwright.engine.evaluate import Motion, evaluate
+from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, Rigid
+
+__all__ = [
+    "Crank",
+    "DyadRRP",
+    "DyadRRR",
+    "Fixed",
+    "InputArcs",
+    "Motion",
+    "Plan",
+    "Rigid",
+    "evaluate",
+    "input_arcs",
+    "trace",
+]

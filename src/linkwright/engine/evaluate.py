@@ -1,0 +1,162 @@
+"""Batched evaluation of a construction plan over (mechanisms × input samples)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from linkwright.engine.plan import JointState, Param, Plan
+
+__all__ = ["Motion", "evaluate", "place_all"]
+
+Array = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Motion:
+    """The result of solving a linkage: every joint over a batch of mechanisms and inputs.
+
+    Arrays have shape ``batch + (samples,)`` (positions add a trailing axis of 2). Positions are
+    NaN exactly where ``valid`` is False, derivatives exactly where ``regular`` is False; nothing
+    NaN is left unmasked. Derivatives are with respect to the input angle θ (per radian).
+
+    Attributes
+    ----------
+    input : the input angle θ of each sample, radians.
+    positions, velocities, accelerations : joint name → array.
+    valid : the linkage is assembled at this sample.
+    regular : the derivatives exist (the sample is not a singular position).
+    branches : dyad joint name → the branch sign used at each sample.
+    margins : dyad joint name → normalised discriminant (0 at that dyad's limit position).
+    """
+
+    input: Array
+    positions: dict[str, Array]
+    velocities: dict[str, Array] | None
+    accelerations: dict[str, Array] | None
+    valid: NDArray[np.bool_]
+    regular: NDArray[np.bool_]
+    branches: dict[str, Array] = field(default_factory=dict)
+    margins: dict[str, Array] = field(default_factory=dict)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return self.input.shape
+
+
+class _Context:
+    def __init__(
+        self,
+        params: Mapping[str, Array],
+        theta: Array,
+        branches: Mapping[str, ArrayLike],
+        order: int,
+    ) -> None:
+        self.params = params
+        self._theta = theta
+        self.branches = branches
+        self.order = order
+        self.states: dict[str, JointState] = {}
+
+    @property
+    def theta(self) -> Array:
+        return self._theta
+
+    def scalar(self, p: Param) -> Array:
+        if isinstance(p, str):
+            return np.asarray(self.params[p], dtype=float)[..., None]
+        return np.float64(p)
+
+    def point(self, key: str) -> Array:
+        return np.asarray(self.params[key], dtype=float)[..., None, :]
+
+    def joint(self, name: str) -> JointState:
+        return self.states[name]
+
+    def branch(self, step_name: str, key: str) -> Array:
+        if step_name in self.branches:
+            b = np.asarray(self.branches[step_name], dtype=float)
+        else:
+            b = np.asarray(self.params[key], dtype=float)[..., None]
+        return np.broadcast_to(b, self._theta.shape)
+
+
+def batch_shape(params: Mapping[str, ArrayLike], points: frozenset[str]) -> tuple[int, ...]:
+    """Broadcast batch shape of a parameter mapping (point parameters carry a trailing 2)."""
+    shapes = []
+    for key, value in params.items():
+        shape = np.shape(value)
+        shapes.append(shape[:-1] if key in points else shape)
+    return np.broadcast_shapes(*shapes) if shapes else ()
+
+
+def place_all(
+    plan: Plan,
+    params: Mapping[str, ArrayLike],
+    theta: ArrayLike,
+    *,
+    points: frozenset[str] = frozenset(),
+    branches: Mapping[str, ArrayLike] | None = None,
+    order: int = 2,
+) -> tuple[Array, dict[str, JointState]]:
+    """Run every step and return the broadcast inputs and the raw, unmasked joint states."""
+    theta = np.asarray(theta, dtype=float)
+    if theta.ndim == 0:
+        theta = theta[None]
+    shape = np.broadcast_shapes(batch_shape(params, points) + (1,), theta.shape)
+    theta = np.broadcast_to(theta, shape)
+    ctx = _Context(params, theta, branches or {}, order)
+    for step in plan.steps:
+        ctx.states[step.name] = step.place(ctx)
+    return theta, ctx.states
+
+
+def evaluate(
+    plan: Plan,
+    params: Mapping[str, ArrayLike],
+    theta: ArrayLike,
+    *,
+    points: frozenset[str] = frozenset(),
+    branches: Mapping[str, ArrayLike] | None = None,
+    order: int = 2,
+) -> Motion:
+    """Place every joint of ``plan`` at the inputs ``theta`` (radians).
+
+    Parameters
+    ----------
+    plan : the construction plan.
+    params : named parameters; scalars have the batch shape, point parameters (listed in
+        ``points``) the batch shape plus a trailing 2.
+    theta : input samples, shape ``(samples,)`` or ``batch + (samples,)``.
+    branches : per-sample branch signs for some dyads (joint name → array broadcastable to the
+        motion's shape), overriding their assembly parameter; used by circuit tracing.
+    order : 0 for positions only, 1 to add velocities, 2 to add accelerations.
+    """
+    theta, states = place_all(plan, params, theta, points=points, branches=branches, order=order)
+    valid = np.ones(theta.shape, dtype=bool)
+    regular = np.ones(theta.shape, dtype=bool)
+    for state in states.values():
+        valid = valid & state.valid
+        regular = regular & state.regular
+    # A joint of a linkage that is not assembled has no position, even a ground pivot: masking
+    # every joint alike keeps "NaN exactly where not valid" a rule without exceptions.
+    keep_pos, keep_der = valid[..., None], regular[..., None]
+
+    def masked(arrays: dict[str, Array | None], keep: NDArray[np.bool_]) -> dict[str, Array]:
+        return {k: np.where(keep, a, np.nan) for k, a in arrays.items() if a is not None}
+
+    return Motion(
+        input=theta,
+        positions=masked({k: s.pos for k, s in states.items()}, keep_pos),
+        velocities=masked({k: s.vel for k, s in states.items()}, keep_der) if order >= 1 else None,
+        accelerations=(
+            masked({k: s.acc for k, s in states.items()}, keep_der) if order >= 2 else None
+        ),
+        valid=valid,
+        regular=regular,
+        branches={k: s.branch for k, s in states.items() if s.branch is not None},
+        margins={k: s.margin for k, s in states.items() if s.margin is not None},
+    )

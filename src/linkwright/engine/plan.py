@@ -1,0 +1,348 @@
+"""Construction plans: a linkage as an ordered list of steps, each placing one joint.
+
+A plan says *how* joints are built from joints already known; the numbers (lengths, pivots,
+assembly signs) live in a separate mapping of named parameters, so one plan evaluates a whole
+batch of mechanisms at once (Pinocchio's model/data split, applied to linkages).
+
+Each step maps its parents' position, velocity and acceleration (derivatives with respect to the
+input angle θ) to its own joint's, from the differentiated constraint equations: a 2×2 solve for
+a dyad, closed forms for cranks and rigid points. Nothing here differences numerically.
+
+Branch convention (one definition for every dyad, see DESIGN.md): a joint P placed from parents
+P1 then P2 has branch ``sign((P2 − P1) × (P − P1))``; a slider pin B placed on a line from P1 has
+branch ``sign((B − H)·d)``, H the foot of P1 on the line and d the line's direction.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from linkwright.geometry import plane
+
+__all__ = [
+    "Crank",
+    "DyadRRP",
+    "DyadRRR",
+    "Fixed",
+    "JointState",
+    "Param",
+    "Plan",
+    "Rigid",
+    "Step",
+]
+
+Array = NDArray[np.float64]
+Param = str | float
+"""A step's numeric parameter: the name of an entry of the parameter mapping, or a constant."""
+
+# Below this |sin| of the angle between a dyad's two links the 2×2 derivative system is treated
+# as singular: the relative error of the derivatives grows like eps/sin², so past 1e-8 they are
+# no longer trustworthy and are reported as masked rather than as large wrong numbers.
+SINGULAR_SIN = 1e-8
+# A dyad whose normalised discriminant is above -ASSEMBLY_TOL still closes (rounding at an exact
+# limit position must not turn the limit itself into a failure); the clamp leaves a constraint
+# residual of the same relative size, far below the 1e-10 promised.
+ASSEMBLY_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class JointState:
+    """Position, first and second θ-derivatives of one joint, and where they are defined.
+
+    ``valid`` marks samples where the joint could be placed; ``regular`` marks samples where the
+    derivatives are finite (not at a singular, e.g. toggle, position). Both have the batch shape.
+    """
+
+    pos: Array
+    vel: Array | None
+    acc: Array | None
+    valid: NDArray[np.bool_]
+    regular: NDArray[np.bool_]
+    margin: Array | None = None
+    """For dyads: the normalised discriminant (≥ 0 where the dyad closes; 0 at a limit)."""
+    branch: Array | None = None
+    """For dyads: the branch sign used at each sample."""
+
+
+class Context(Protocol):
+    order: int
+
+    def scalar(self, p: Param) -> Array: ...
+    def point(self, key: str) -> Array: ...
+    def joint(self, name: str) -> JointState: ...
+    def branch(self, step_name: str, key: str) -> Array: ...
+    @property
+    def theta(self) -> Array: ...
+
+
+class Step(Protocol):
+    name: str
+
+    @property
+    def parents(self) -> tuple[str, ...]: ...
+
+    def place(self, ctx: Context) -> JointState: ...
+
+
+def _zeros_like_pos(pos: Array) -> Array:
+    return np.zeros_like(pos)
+
+
+def _combine(*states: JointState) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    valid = states[0].valid
+    regular = states[0].regular
+    for s in states[1:]:
+        valid = valid & s.valid
+        regular = regular & s.regular
+    return valid, regular
+
+
+@dataclass(frozen=True)
+class Fixed:
+    """A ground pivot at the point parameter ``at``."""
+
+    name: str
+    at: str
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return ()
+
+    def place(self, ctx: Context) -> JointState:
+        pos = np.broadcast_to(ctx.point(self.at), ctx.theta.shape + (2,))
+        true = np.ones(ctx.theta.shape, dtype=bool)
+        zeros = np.zeros(ctx.theta.shape + (2,)) if ctx.order else None
+        return JointState(pos, zeros, zeros, true, true)
+
+
+@dataclass(frozen=True)
+class Crank:
+    """A joint at ``length`` from ``pivot``, at the absolute angle ``phase + ratio·θ``."""
+
+    name: str
+    pivot: str
+    length: Param
+    ratio: Param = 1.0
+    phase: Param = 0.0
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.pivot,)
+
+    def place(self, ctx: Context) -> JointState:
+        o = ctx.joint(self.pivot)
+        r = ctx.scalar(self.length)
+        k = ctx.scalar(self.ratio)
+        phi = ctx.scalar(self.phase) + k * ctx.theta
+        c, s = np.cos(phi), np.sin(phi)
+        arm = np.stack((r * c, r * s), axis=-1)
+        pos = o.pos + arm
+        vel = acc = None
+        if ctx.order >= 1:
+            vel = o.vel + (k * r)[..., None] * np.stack((-s, c), axis=-1)
+        if ctx.order >= 2:
+            acc = o.acc - (k * k)[..., None] * arm
+        return JointState(pos, vel, acc, o.valid, o.regular)
+
+
+@dataclass(frozen=True)
+class DyadRRR:
+    """The joint of two binary links: circle(p1, r1) ∩ circle(p2, r2), on branch ``branch``."""
+
+    name: str
+    p1: str
+    r1: Param
+    p2: str
+    r2: Param
+    branch: str = "assembly"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.p1, self.p2)
+
+    def place(self, ctx: Context) -> JointState:
+        j1, j2 = ctx.joint(self.p1), ctx.joint(self.p2)
+        r1, r2 = ctx.scalar(self.r1), ctx.scalar(self.r2)
+        sign = ctx.branch(self.name, self.branch)
+        delta = j2.pos - j1.pos
+        d2 = plane.dot(delta, delta)
+        # (r1+r2)² − d² and d² − (r1−r2)², each exact near its own root.
+        outer = (r1 + r2) ** 2 - d2
+        inner = d2 - (r1 - r2) ** 2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            margin = outer * inner / (4.0 * d2 * r1 * r1)  # = h²/r1² = sin² of the angle at p1
+            d = np.sqrt(d2)
+            a = (r1 * r1 - r2 * r2 + d2) / (2.0 * d)
+            h = r1 * np.sqrt(np.clip(margin, 0.0, None))
+            pos = j1.pos + (a[..., None] * delta + (sign * h)[..., None] * plane.perp(delta)) / (
+                d[..., None]
+            )
+        valid = j1.valid & j2.valid & (margin >= -ASSEMBLY_TOL) & (d2 > 0)
+        pos = np.where(valid[..., None], pos, np.nan)
+        rel1, rel2 = pos - j1.pos, pos - j2.pos
+        det_rel = plane.cross(rel1, rel2) / (r1 * r2)
+        regular = valid & j1.regular & j2.regular & (np.abs(det_rel) > SINGULAR_SIN)
+        vel = acc = None
+        if ctx.order >= 1:
+            vel, _ = plane.solve_2x2_rows(
+                rel1, rel2, plane.dot(rel1, j1.vel), plane.dot(rel2, j2.vel)
+            )
+        if ctx.order >= 2:
+            w1, w2 = vel - j1.vel, vel - j2.vel
+            acc, _ = plane.solve_2x2_rows(
+                rel1,
+                rel2,
+                plane.dot(rel1, j1.acc) - plane.dot(w1, w1),
+                plane.dot(rel2, j2.acc) - plane.dot(w2, w2),
+            )
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
+
+
+@dataclass(frozen=True)
+class DyadRRP:
+    """A slider pin: circle(p1, r) ∩ the line through joint ``line_point`` at ``line_angle``.
+
+    The line keeps a fixed direction (a ground guide, or a guide translating with its joint).
+    """
+
+    name: str
+    p1: str
+    r: Param
+    line_point: str
+    line_angle: Param
+    branch: str = "assembly"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.p1, self.line_point)
+
+    def place(self, ctx: Context) -> JointState:
+        j1, jl = ctx.joint(self.p1), ctx.joint(self.line_point)
+        r = ctx.scalar(self.r)
+        sign = ctx.branch(self.name, self.branch)
+        ang = ctx.scalar(self.line_angle)
+        d = np.stack(np.broadcast_arrays(np.cos(ang), np.sin(ang)), axis=-1)
+        n = plane.perp(d)
+        rel = j1.pos - jl.pos
+        along = plane.dot(rel, d)
+        offset = plane.dot(rel, n)  # signed distance of p1 from the line
+        with np.errstate(divide="ignore", invalid="ignore"):
+            margin = (r - offset) * (r + offset) / (r * r)  # = cos² of the rod's angle to the line
+            half = r * np.sqrt(np.clip(margin, 0.0, None))
+        foot = jl.pos + along[..., None] * d
+        pos = foot + (sign * half)[..., None] * d
+        valid = j1.valid & jl.valid & (margin >= -ASSEMBLY_TOL)
+        pos = np.where(valid[..., None], pos, np.nan)
+        rel1 = pos - j1.pos
+        det_rel = plane.cross(rel1, n) / r
+        regular = valid & j1.regular & jl.regular & (np.abs(det_rel) > SINGULAR_SIN)
+        vel = acc = None
+        if ctx.order >= 1:
+            vel, _ = plane.solve_2x2_rows(
+                rel1, n, plane.dot(rel1, j1.vel), plane.dot(n, jl.vel)
+            )
+        if ctx.order >= 2:
+            w1 = vel - j1.vel
+            acc, _ = plane.solve_2x2_rows(
+                rel1, n, plane.dot(rel1, j1.acc) - plane.dot(w1, w1), plane.dot(n, jl.acc)
+            )
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
+
+
+@dataclass(frozen=True)
+class Rigid:
+    """A point fixed on the link ``origin``→``toward``: local (u, v), x along the link, v left.
+
+    Its derivatives use the link's constant length, which is exact because both joints lie on one
+    rigid body.
+    """
+
+    name: str
+    origin: str
+    toward: str
+    u: Param
+    v: Param
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.origin, self.toward)
+
+    def place(self, ctx: Context) -> JointState:
+        jo, jt = ctx.joint(self.origin), ctx.joint(self.toward)
+        u, v = ctx.scalar(self.u), ctx.scalar(self.v)
+        delta = jt.pos - jo.pos
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv_len = 1.0 / plane.norm(delta)
+        cu, cv = (u * inv_len)[..., None], (v * inv_len)[..., None]
+
+        def local(vec: Array) -> Array:
+            return cu * vec + cv * plane.perp(vec)
+
+        valid, regular = _combine(jo, jt)
+        valid = valid & np.isfinite(inv_len)
+        pos = np.where(valid[..., None], jo.pos + local(delta), np.nan)
+        vel = jo.vel + local(jt.vel - jo.vel) if ctx.order >= 1 else None
+        acc = jo.acc + local(jt.acc - jo.acc) if ctx.order >= 2 else None
+        regular = regular & valid
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular)
+
+
+def _mask_derivatives(
+    vel: Array | None, acc: Array | None, regular: NDArray[np.bool_]
+) -> tuple[Array | None, Array | None]:
+    keep = regular[..., None]
+    if vel is not None:
+        vel = np.where(keep, vel, np.nan)
+    if acc is not None:
+        acc = np.where(keep, acc, np.nan)
+    return vel, acc
+
+
+DYAD_TYPES = (DyadRRR, DyadRRP)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """An ordered, validated list of steps for one single-input linkage.
+
+    ``traced`` names the joints whose paths are the linkage's curves (the first is the default).
+    """
+
+    steps: tuple[Step, ...]
+    traced: tuple[str, ...] = ("P",)
+
+    def __post_init__(self) -> None:
+        known: set[str] = set()
+        for step in self.steps:
+            if step.name in known:
+                raise ValueError(f"joint {step.name!r} is placed twice")
+            for parent in step.parents:
+                if parent not in known:
+                    raise ValueError(
+                        f"joint {step.name!r} is built from {parent!r}, which is not placed before it"
+                    )
+            known.add(step.name)
+        for name in self.traced:
+            if name not in known:
+                raise ValueError(f"traced joint {name!r} is not placed by the plan")
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.steps)
+
+    @property
+    def dyads(self) -> tuple[Step, ...]:
+        return tuple(s for s in self.steps if isinstance(s, DYAD_TYPES))
+
+    def step(self, name: str) -> Step:
+        for s in self.steps:
+            if s.name == name:
+                return s
+        raise KeyError(name)

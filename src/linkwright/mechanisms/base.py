@@ -1,0 +1,180 @@
+"""What every named family shares: an immutable value that compiles to a plan and parameters.
+
+The verbs that act on mechanisms (:func:`solve`, :func:`circuit`, :func:`configurations`,
+:func:`input_range`) are free functions, so a mechanism stays a plain value: dimensions that may
+be arrays with a leading batch shape (one object can stand for a million linkages) and the
+assembly choice.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from linkwright.engine import InputArcs, Motion, Plan, evaluate, input_arcs, trace
+from linkwright.engine.evaluate import batch_shape
+
+__all__ = [
+    "Mechanism",
+    "circuit",
+    "configurations",
+    "input_range",
+    "solve",
+]
+
+Array = NDArray[np.float64]
+
+
+class InvalidMechanism(ValueError):
+    """A mechanism's dimensions are not a linkage (names the field and the problem)."""
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """Base of the named families. Subclasses declare their plan and their point fields."""
+
+    family: ClassVar[str]
+    plan: ClassVar[Plan]
+    point_fields: ClassVar[frozenset[str]] = frozenset()
+    length_fields: ClassVar[tuple[str, ...]] = ()
+    reported_joints: ClassVar[tuple[str, ...]] = ()
+    traced_joint: ClassVar[str] = "P"
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = np.asarray(getattr(self, f.name), dtype=float)
+            if f.name in self.point_fields and value.shape[-1:] != (2,):
+                raise InvalidMechanism(f"{f.name}: must be a point [x, y], got shape {value.shape}")
+            if not np.all(np.isfinite(value)):
+                raise InvalidMechanism(f"{f.name}: must be finite, got {_show(value)}")
+            if f.name in self.length_fields and np.any(value <= 0):
+                raise InvalidMechanism(f"{f.name}: must be a positive length, got {_show(value)}")
+            if f.name == "assembly" and not np.all(np.abs(value) == 1):
+                raise InvalidMechanism(f"assembly: must be 1 or -1, got {_show(value)}")
+            object.__setattr__(self, f.name, value)
+        try:
+            self.batch_shape  # noqa: B018 - broadcasting check
+        except ValueError as exc:
+            raise InvalidMechanism(f"dimension arrays do not broadcast together: {exc}") from None
+
+    def params(self) -> dict[str, Array]:
+        """The named parameters of the plan (lengths, radians, points, assembly sign)."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    @property
+    def batch_shape(self) -> tuple[int, ...]:
+        return batch_shape(self.params(), self.point_fields)
+
+    @property
+    def scale(self) -> Array:
+        """A characteristic size (the largest length), for relative tolerances."""
+        lengths = [np.asarray(getattr(self, n)) for n in self.length_fields]
+        return np.maximum.reduce(np.broadcast_arrays(*lengths)) if lengths else np.float64(1.0)
+
+    def with_assembly(self, assembly: ArrayLike) -> Mechanism:
+        return type(self)(**{**self.params(), "assembly": assembly})
+
+
+def _show(value: NDArray) -> str:
+    if value.ndim == 0:
+        return repr(float(value))
+    bad = value[~np.isfinite(value) | (value <= 0)] if value.size else value
+    return f"{bad.ravel()[:3].tolist()} (of an array of shape {value.shape})"
+
+
+def solve(mechanism: Mechanism, inputs: ArrayLike, *, order: int = 2) -> Motion:
+    """Positions (and ``order`` derivatives) of every joint at the inputs (radians).
+
+    ``inputs`` has shape ``(samples,)`` or ``batch + (samples,)``. The mechanism's own assembly
+    is used; samples where it cannot be assembled are masked (``motion.valid``).
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import FourBar
+    >>> crank_rocker = FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=3.5)
+    >>> m = solve(crank_rocker, [0.0, np.pi / 2])
+    >>> np.round(m.positions["B"], 6)
+    array([[4.625   , 3.443744],
+           [4.339621, 3.483484]])
+
+    A linkage that cannot assemble gives NaN positions, masked by ``valid``:
+
+    >>> too_short = FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3)
+    >>> m = solve(too_short, [0.0])
+    >>> m.valid, m.positions["B"]
+    (array([False]), array([[nan, nan]]))
+    """
+    return evaluate(
+        mechanism.plan, mechanism.params(), inputs, points=mechanism.point_fields, order=order
+    )
+
+
+def configurations(
+    mechanism: Mechanism, inputs: ArrayLike, *, order: int = 2
+) -> list[tuple[tuple[int, ...], Motion]]:
+    """Every assembly configuration at the inputs: one motion per combination of branch signs.
+
+    Returns ``[(signs, motion), ...]`` with ``signs`` one ±1 per dyad in plan order; each motion's
+    ``valid`` says where that configuration is real.
+    """
+    dyads = mechanism.plan.dyads
+    out = []
+    for signs in itertools.product((1, -1), repeat=len(dyads)):
+        branches = {d.name: np.float64(s) for d, s in zip(dyads, signs, strict=True)}
+        motion = evaluate(
+            mechanism.plan,
+            mechanism.params(),
+            inputs,
+            points=mechanism.point_fields,
+            branches=branches,
+            order=order,
+        )
+        out.append((signs, motion))
+    return out
+
+
+def circuit(mechanism: Mechanism, samples: int = 360, *, order: int = 2, circuit: int = 0) -> Motion:
+    """The whole closed circuit, as the machine runs, sampled at ``samples`` inputs.
+
+    Where the input turns fully this is one turn on the mechanism's assembly. Where it cannot,
+    the input sweeps its arc up and back down, the dyad changing branch at each limit position
+    (both limits are samples, exactly).
+
+    Examples
+    --------
+    Driving the long link of a crank-rocker, the input swings over |θ| ≥ arccos(−11/28):
+
+    >>> from linkwright.mechanisms import FourBar
+    >>> rocker_input = FourBar(A0=[0, 0], B0=[1, 0], crank=3.5, coupler=5, rocker=1)
+    >>> m = circuit(rocker_input, 8)
+    >>> np.degrees(m.input).round(3)
+    array([113.132, 146.566, 180.   , 213.434, 246.868, 213.434, 180.   , 146.566])
+    >>> m.branches["B"]
+    array([ 1.,  1.,  1.,  1., -1., -1., -1., -1.])
+    """
+    return trace(
+        mechanism.plan,
+        mechanism.params(),
+        samples,
+        points=mechanism.point_fields,
+        order=order,
+        circuit=circuit,
+    )
+
+
+def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:
+    """The admissible input arcs (limit positions as exact roots) of each mechanism."""
+    return input_arcs(mechanism.plan, mechanism.params(), points=mechanism.point_fields, method=method)
+
+
+def constraint_residuals(mechanism: Mechanism, motion: Motion) -> Mapping[str, Array]:
+    """Each family's own closure equations evaluated on a motion, relative to its size.
+
+    Families override :meth:`Mechanism.residuals`; this is the free verb over it.
+    """
+    return mechanism.residuals(motion)  # type: ignore[attr-defined]
