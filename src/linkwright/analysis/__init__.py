@@ -1,0 +1,163 @@
+"""Analyses: pure functions of a mechanism (and its motion); nothing cached behind your back.
+
+:func:`analyze` gathers the planar analyses into the JSON-ready report of ``linkwright analyze``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from linkwright.analysis.planar import (
+    coefficients,
+    fourbar_class,
+    grashof,
+    output_angle,
+    output_extremes,
+    output_rates,
+    slidercrank_class,
+    stroke,
+    transmission_angle,
+    transmission_extremes,
+)
+from linkwright.mechanisms import FourBar, SliderCrank, input_range
+from linkwright.mechanisms.base import Mechanism
+
+__all__ = [
+    "analyze",
+    "coefficients",
+    "fourbar_class",
+    "grashof",
+    "output_angle",
+    "output_extremes",
+    "output_rates",
+    "slidercrank_class",
+    "stroke",
+    "transmission_angle",
+    "transmission_extremes",
+]
+
+
+def _num(x: Any, digits: int = 12) -> float | None:
+    """A JSON number, or None for NaN/inf (a report never carries NaN)."""
+    v = float(x)
+    return round(v, digits) if math.isfinite(v) else None
+
+
+def _deg(x: Any) -> float | None:
+    return _num(np.degrees(float(x)))
+
+
+def _wrap_deg(x: Any) -> float | None:
+    """Angle in degrees wrapped to (−180, 180]."""
+    v = float(x)
+    if not math.isfinite(v):
+        return None
+    return _num(-(((-np.degrees(v)) + 180.0) % 360.0 - 180.0))
+
+
+def analyze(mechanism: Mechanism) -> dict[str, Any]:
+    """The full kinematic report of one planar four-bar or slider-crank, in degrees.
+
+    Angles of the input (φ1) and output (φ3) are measured from the frame line A0→B0 as in paper
+    003 (for a slider-crank: from the slider's line direction), counter-clockwise.
+
+    Keys: ``family``, ``class``, ``grashof`` (s + l − p − q over l; four-bar), ``assembles``,
+    ``reason`` (when it does not), ``reference_angle_deg`` (the frame line's absolute direction),
+    ``input_range_deg`` (``None`` for a full turn), ``input_arcs_deg``, ``limit_positions_deg``,
+    ``output_range_deg`` and ``swing_deg`` (four-bar, ``None`` when the output turns fully),
+    ``output_range`` and ``stroke`` (slider-crank, lengths), ``transmission_angle_deg``
+    (``min``, ``max`` and the inputs where they occur), ``pressure_angle_deg`` (90° − γ),
+    ``time_ratio``, ``coefficients`` (``K_omega``, ``K_epsilon``, ``K_p``, ``delta``).
+
+    Examples
+    --------
+    Paper 003, Table 4, first row (printed: Kω 1.33, Kε 2.84, δ 0.63, ν 33.69°):
+
+    >>> r = analyze(FourBar(A0=[0, 0], B0=[1, 0], crank=4, coupler=2, rocker=13**0.5))
+    >>> r["class"], r["input_range_deg"], r["output_range_deg"]
+    ('double-crank', None, None)
+    >>> {k: round(v, 3) for k, v in r["coefficients"].items()}
+    {'K_omega': 1.333, 'K_epsilon': 2.845, 'K_p': 3.182, 'delta': 0.631}
+    >>> round(r["pressure_angle_deg"]["max"], 2)
+    33.69
+
+    A linkage that cannot be assembled says so, and every number is null:
+
+    >>> r = analyze(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3))
+    >>> r["assembles"], r["reason"], r["swing_deg"], r["coefficients"]["K_omega"]
+    (False, 'the coupler and rocker cannot reach each other at any input', None, None)
+    """
+    if mechanism.batch_shape != ():
+        raise ValueError("analyze reports on one mechanism; index the batch first")
+    arcs = input_range(mechanism)
+    is_fourbar = isinstance(mechanism, FourBar)
+    if is_fourbar:
+        ref = float(mechanism.frame_angle)
+        cls = str(fourbar_class(mechanism))
+        link_words = "the coupler and rocker cannot reach each other"
+    elif isinstance(mechanism, SliderCrank):
+        ref = float(mechanism.line_angle)
+        cls = str(slidercrank_class(mechanism))
+        link_words = "the rod cannot reach the slider's line"
+    else:
+        raise TypeError(f"no planar analysis for family {mechanism.family!r}")
+    report: dict[str, Any] = {
+        "family": mechanism.family,
+        "class": cls,
+        "assembles": not bool(arcs.never),
+        "reference_angle_deg": _deg(ref),
+    }
+    if is_fourbar:
+        report["grashof"] = _num(grashof(mechanism))
+    if arcs.never:
+        report["reason"] = f"{link_words} at any input"
+        for key in ("input_range_deg", "output_range_deg", "swing_deg", "time_ratio"):
+            report[key] = None
+        report["input_arcs_deg"] = []
+        report["limit_positions_deg"] = []
+        report["transmission_angle_deg"] = {"min": None, "max": None}
+        report["pressure_angle_deg"] = {"min": None, "max": None}
+        if not is_fourbar:
+            report["output_range"] = None
+            report["stroke"] = None
+        report["coefficients"] = dict.fromkeys(("K_omega", "K_epsilon", "K_p", "delta"))
+        return report
+
+    arcs_rel = [
+        [_wrap_deg(lo - ref), _num(np.degrees(hi - lo)) + _wrap_deg(lo - ref)]  # type: ignore[operator]
+        for lo, hi in zip(arcs.lo, arcs.hi, strict=True)
+        if math.isfinite(lo)
+    ]
+    report["input_range_deg"] = None if arcs.full else arcs_rel[0]
+    report["input_arcs_deg"] = [] if arcs.full else arcs_rel
+    report["limit_positions_deg"] = [a for arc in arcs_rel for a in arc]
+
+    ext = output_extremes(mechanism)
+    if is_fourbar:
+        rocking = not bool(ext["turns"])
+        report["output_range_deg"] = [_deg(ext["min"]), _deg(ext["max"])] if rocking else None
+        report["swing_deg"] = _deg(ext["max"] - ext["min"]) if rocking else None
+    else:
+        report["output_range"] = [_num(ext["min"]), _num(ext["max"])]
+        report["stroke"] = _num(ext["max"] - ext["min"])
+        report["output_range_deg"] = None
+        report["swing_deg"] = None
+
+    tx = transmission_extremes(mechanism)
+    report["transmission_angle_deg"] = {
+        "min": _deg(tx["min"]),
+        "max": _deg(tx["max"]),
+        "min_at_input_deg": _wrap_deg(tx["min_at"] - ref),
+        "max_at_input_deg": _wrap_deg(tx["max_at"] - ref),
+    }
+    report["pressure_angle_deg"] = {
+        "min": _num(90.0 - np.degrees(tx["max"])),
+        "max": _num(90.0 - np.degrees(tx["min"])),
+    }
+    co = coefficients(mechanism)
+    report["time_ratio"] = _num(co["time_ratio"])
+    report["coefficients"] = {k: _num(co[k]) for k in ("K_omega", "K_epsilon", "K_p", "delta")}
+    return report

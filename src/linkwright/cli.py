@@ -1,0 +1,603 @@
+"""The ``linkwright`` command line: solve, trace, analyse and demo mechanism documents.
+
+Documents and the command line speak degrees; the engine speaks radians. Errors end the program
+with status 2 and one line ``error: <message>`` on standard error, never a traceback. numpy and
+the engine are imported inside the commands, so ``linkwright --help`` and ``--version`` start
+fast.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from collections.abc import Mapping, Sequence
+from decimal import Decimal, InvalidOperation
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+try:  # typer ≥ 0.22 vendors click; older ones depend on it
+    from typer._click import exceptions as click_exceptions
+except ImportError:  # pragma: no cover - depends on the installed typer
+    from click import exceptions as click_exceptions  # type: ignore[no-redef]
+
+from linkwright import __version__
+
+if TYPE_CHECKING:
+    from linkwright.io import Document
+    from linkwright.mechanisms import Mechanism
+
+__all__ = ["CliError", "app", "main", "parse_inputs"]
+
+# Samples a --input range may ask for: far beyond any useful table, well below running out of
+# memory.
+MAX_SAMPLES = 1_000_000
+DEFAULT_INPUTS = [float(30 * k) for k in range(12)]
+
+
+class CliError(Exception):
+    """A problem with how the command was used; reported as ``error: <message>``, status 2."""
+
+
+app = typer.Typer(
+    name="linkwright",
+    help="Kinematics workbench for planar linkages: solve, trace and analyse mechanism documents.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+)
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        sys.stdout.write(f"linkwright {__version__}\n")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version",
+            help="Print the version and exit.",
+            is_eager=True,
+            callback=_version_callback,
+        ),
+    ] = False,
+) -> None:
+    """Kinematics workbench for planar linkages: solve, trace and analyse mechanism documents.
+
+    FILE is a .toml or .json mechanism document (or the name of a bundled example).
+    """
+
+
+# --------------------------------------------------------------------------------------------
+# Helpers
+# --------------------------------------------------------------------------------------------
+
+
+def _decimal(text: str, what: str) -> Decimal:
+    try:
+        value = Decimal(text.strip())
+    except InvalidOperation:
+        raise CliError(f"--input: {what} must be a number, got {text.strip()!r}") from None
+    if not value.is_finite() or not math.isfinite(float(value)):
+        raise CliError(f"--input: {what} must be a finite number, got {text.strip()!r}")
+    return value
+
+
+def parse_inputs(spec: str) -> list[float]:
+    """Input angles (degrees) from ``START:STOP:STEP`` or a comma-separated list.
+
+    A range includes STOP when it lands on the grid. Arithmetic is decimal, so ``0:1:0.1`` gives
+    exactly the eleven numbers written, not ten with a rounding shortfall.
+
+    Raises
+    ------
+    CliError
+        For a malformed spec, a zero step, a step away from STOP, or too many samples.
+
+    Examples
+    --------
+    >>> parse_inputs("0:90:30")
+    [0.0, 30.0, 60.0, 90.0]
+    >>> parse_inputs("0:100:30")
+    [0.0, 30.0, 60.0, 90.0]
+    >>> parse_inputs("10, -5.5,720")
+    [10.0, -5.5, 720.0]
+    """
+    text = spec.strip()
+    if not text:
+        raise CliError("--input: empty; expected START:STOP:STEP or a comma list of degrees")
+    if ":" in text:
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise CliError(f"--input: expected START:STOP:STEP, got {spec!r}")
+        start, stop, step = (
+            _decimal(p, w) for p, w in zip(parts, ("START", "STOP", "STEP"), strict=True)
+        )
+        if step == 0:
+            raise CliError("--input: STEP must not be zero")
+        span = (stop - start) / step
+        if span < 0:
+            raise CliError(f"--input: STEP {step} goes away from STOP ({start} to {stop})")
+        if span >= MAX_SAMPLES:
+            raise CliError(f"--input: {spec!r} asks for more than {MAX_SAMPLES} samples")
+        return [float(start + k * step) for k in range(int(span) + 1)]
+    items = text.split(",")
+    if len(items) > MAX_SAMPLES:
+        raise CliError(f"--input: more than {MAX_SAMPLES} samples")
+    return [float(_decimal(p, "each angle")) for p in items]
+
+
+def _load(file: str) -> Document:
+    from linkwright.io import list_examples, load_document, load_example
+
+    path = Path(file)
+    if not path.exists() and not path.suffix and file in list_examples():
+        return load_example(file)
+    return load_document(path)
+
+
+def _num(x: Any) -> float | None:
+    """A plain float for JSON, or None where the value is missing (NaN)."""
+    value = float(x)
+    return value if math.isfinite(value) else None
+
+
+def _xy(row: Any) -> list[float] | None:
+    x, y = float(row[0]), float(row[1])
+    return [x, y] if math.isfinite(x) and math.isfinite(y) else None
+
+
+def _jsonable(value: Any) -> Any:
+    """Plain JSON values: numpy scalars and arrays unwrapped, NaN and infinities as null."""
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, str | bool) or value is None:
+        return value
+    if isinstance(value, int):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if hasattr(value, "tolist"):  # numpy scalar or array
+        return _jsonable(value.tolist())
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    return str(value)
+
+
+def _dump(obj: Any) -> str:
+    return json.dumps(_jsonable(obj), allow_nan=False, ensure_ascii=False) + "\n"
+
+
+def _fmt(x: Any, width: int = 11, places: int = 6) -> str:
+    if x is None:
+        return "-".rjust(width)
+    if isinstance(x, bool) or not isinstance(x, int | float):
+        return str(x).rjust(width)
+    if not math.isfinite(x):
+        return "-".rjust(width)
+    if abs(x) < 0.5 * 10.0**-places:
+        x = 0.0  # no "-0.000000" for a coordinate that is zero up to rounding
+    return f"{x:{width}.{places}f}"
+
+
+def _signs(signs: Sequence[int]) -> str:
+    return ",".join(f"{s:+d}" for s in signs)
+
+
+def _heading(doc: Document) -> str:
+    name = f"{doc.title} [{doc.family}]" if doc.title else f"[{doc.family}]"
+    return f"# {name}" + (f", lengths in {doc.units}" if doc.units else "")
+
+
+def _own_signs(mech: Mechanism) -> tuple[int, ...]:
+    import numpy as np
+
+    params = mech.params()
+    return tuple(int(np.asarray(params[d.branch])) for d in mech.plan.dyads)
+
+
+def _ground_joints(mech: Mechanism) -> tuple[str, ...]:
+    from linkwright.engine import Fixed
+
+    fixed = {s.name for s in mech.plan.steps if isinstance(s, Fixed)}
+    return tuple(j for j in mech.reported_joints if j in fixed)
+
+
+def unassembled_reason(mech: Mechanism, theta: float) -> str:
+    """Why the mechanism's first failing dyad cannot close at input ``theta`` (radians).
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import FourBar
+    >>> far = FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3)
+    >>> head, why = unassembled_reason(far, 0.0).split(": ", 1)
+    >>> head
+    'cannot be assembled at this input'
+    >>> why
+    'the coupler and rocker cannot reach (dyad B: |A B0| = 9 > coupler + rocker = 5)'
+    """
+    import numpy as np
+
+    from linkwright.engine import DyadRRP, DyadRRR
+    from linkwright.engine.evaluate import place_all
+
+    params = mech.params()
+    _, states = place_all(mech.plan, params, np.array([theta]), points=mech.point_fields, order=0)
+
+    def value(p: Any) -> float:
+        return float(np.asarray(params[p] if isinstance(p, str) else p, dtype=float))
+
+    def word(p: Any) -> str:
+        return p if isinstance(p, str) else "link"
+
+    head = "cannot be assembled at this input"
+    for dyad in mech.plan.dyads:
+        state = states[dyad.name]
+        if bool(np.all(state.valid)):
+            continue
+        if isinstance(dyad, DyadRRR):
+            p1, p2 = states[dyad.p1].pos[..., 0, :], states[dyad.p2].pos[..., 0, :]
+            d = float(np.hypot(*(p2 - p1)))
+            r1, r2 = value(dyad.r1), value(dyad.r2)
+            w1, w2 = word(dyad.r1), word(dyad.r2)
+            where = f"dyad {dyad.name}: |{dyad.p1} {dyad.p2}| = {d:.6g}"
+            if d == 0:
+                return f"{head}: the pivots {dyad.p1} and {dyad.p2} of dyad {dyad.name} coincide"
+            if d > r1 + r2:
+                return (
+                    f"{head}: the {w1} and {w2} cannot reach "
+                    f"({where} > {w1} + {w2} = {r1 + r2:.6g})"
+                )
+            return (
+                f"{head}: the {w1} and {w2} cannot fold that short "
+                f"({where} < |{w1} - {w2}| = {abs(r1 - r2):.6g})"
+            )
+        if isinstance(dyad, DyadRRP):
+            p1 = states[dyad.p1].pos[..., 0, :]
+            lp = states[dyad.line_point].pos[..., 0, :]
+            ang = value(dyad.line_angle)
+            off = abs(float(np.dot(p1 - lp, [-math.sin(ang), math.cos(ang)])))
+            w = word(dyad.r)
+            return (
+                f"{head}: the {w} cannot reach the slider's line "
+                f"(dyad {dyad.name}: {dyad.p1} is {off:.6g} from it > {w} = {value(dyad.r):.6g})"
+            )
+        return f"{head} (dyad {dyad.name})"
+    return head
+
+
+# --------------------------------------------------------------------------------------------
+# Commands
+# --------------------------------------------------------------------------------------------
+
+FileArg = Annotated[
+    str,
+    typer.Argument(
+        metavar="FILE",
+        help="Mechanism document (.toml or .json), or the name of a bundled example.",
+        show_default=False,
+    ),
+]
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+
+
+@app.command()
+def solve(
+    file: FileArg,
+    inputs: Annotated[
+        str | None,
+        typer.Option(
+            "--input",
+            "-i",
+            metavar="SPEC",
+            help="Input angles in degrees: START:STOP:STEP (STOP included when on the grid) or a "
+            "comma list. Default: 0 to 330 every 30.",
+            show_default=False,
+        ),
+    ] = None,
+    all_: Annotated[
+        bool,
+        typer.Option("--all", help="Every real assembly configuration, not only the document's."),
+    ] = False,
+    derivatives: Annotated[
+        bool,
+        typer.Option(
+            "--derivatives", help="Add each joint's velocity and acceleration, per radian of input."
+        ),
+    ] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """Joint positions at the given input angles."""
+    degrees = parse_inputs(inputs) if inputs is not None else list(DEFAULT_INPUTS)
+    doc = _load(file)
+    result = solve_document(doc, degrees, all_configurations=all_, derivatives=derivatives)
+    sys.stdout.write(_dump(result) if as_json else _solve_text(doc, result, derivatives))
+
+
+def solve_document(
+    doc: Document,
+    degrees: Sequence[float],
+    *,
+    all_configurations: bool = False,
+    derivatives: bool = False,
+) -> dict[str, Any]:
+    """The ``solve`` command's JSON-ready result for a document at inputs in degrees."""
+    import numpy as np
+
+    from linkwright.mechanisms import configurations, solve
+
+    mech = doc.mechanism
+    theta = np.radians(np.asarray(degrees, dtype=float))
+    order = 2 if derivatives else 0
+    if all_configurations:
+        motions = configurations(mech, theta, order=order)
+    else:
+        motions = [(_own_signs(mech), solve(mech, theta, order=order))]
+    joints = mech.reported_joints
+    samples = []
+    for i, deg in enumerate(degrees):
+        found = []
+        for signs, m in motions:
+            if not bool(m.valid[..., i]):
+                continue
+            entry: dict[str, Any] = {
+                "assembly": [int(s) for s in signs],
+                "joints": {j: _xy(m.positions[j][..., i, :]) for j in joints},
+            }
+            if derivatives:
+                entry["velocity"] = {j: _xy(m.velocities[j][..., i, :]) for j in joints}
+                entry["acceleration"] = {j: _xy(m.accelerations[j][..., i, :]) for j in joints}
+            found.append(entry)
+        sample: dict[str, Any] = {"input_deg": float(deg), "configurations": found}
+        if not found:
+            sample["reason"] = unassembled_reason(mech, float(theta[i]))
+        samples.append(sample)
+    return {"family": doc.family, "samples": samples}
+
+
+def _solve_text(doc: Document, result: Mapping[str, Any], derivatives: bool) -> str:
+    mech = doc.mechanism
+    ground = _ground_joints(mech)
+    moving = [j for j in mech.reported_joints if j not in ground]
+    lines = [_heading(doc)]
+    if ground:
+        pivots = ", ".join(
+            f"{j} = ({_fmt(xy[0], 0, 6)}, {_fmt(xy[1], 0, 6)})"
+            for j in ground
+            if (xy := _ground_xy(mech, j)) is not None
+        )
+        lines.append(f"# ground pivots: {pivots}")
+    sections = [("joints", "positions")]
+    if derivatives:
+        sections += [
+            ("velocity", "velocities, per radian of input"),
+            ("acceleration", "accelerations, per radian of input"),
+        ]
+    header = f"{'input_deg':>10} {'assembly':>9} " + " ".join(
+        f"{j + '.' + c:>11}" for j in moving for c in "xy"
+    )
+    for key, label in sections:
+        lines += ["", f"# {label}", header]
+        for sample in result["samples"]:
+            deg = _fmt(sample["input_deg"], 10, 3)
+            if not sample["configurations"]:
+                lines.append(f"{deg} {'-':>9}  {sample['reason']}")
+            for entry in sample["configurations"]:
+                values = entry[key]
+                cells = " ".join(
+                    _fmt(None if values[j] is None else values[j][c])
+                    for j in moving
+                    for c in (0, 1)
+                )
+                lines.append(f"{deg} {_signs(entry['assembly']):>9} {cells}")
+    return "\n".join(lines) + "\n"
+
+
+def _ground_xy(mech: Mechanism, joint: str) -> list[float] | None:
+    import numpy as np
+
+    from linkwright.engine import Fixed
+
+    step = mech.plan.step(joint)
+    if not isinstance(step, Fixed):
+        return None
+    return _xy(np.asarray(mech.params()[step.at], dtype=float))
+
+
+@app.command()
+def curve(
+    file: FileArg,
+    points: Annotated[
+        int,
+        typer.Option(
+            "--points",
+            "-n",
+            metavar="N",
+            min=2,
+            max=MAX_SAMPLES,
+            help="Samples over the whole circuit.",
+        ),
+    ] = 360,
+    as_csv: Annotated[bool, typer.Option("--csv", help="Print CSV.")] = False,
+    as_json: JsonOpt = False,
+) -> None:
+    """The path of the traced point P over the whole closed circuit."""
+    if as_csv and as_json:
+        raise CliError("--csv and --json cannot be used together")
+    doc = _load(file)
+    result = curve_document(doc, points)
+    if as_json:
+        sys.stdout.write(_dump(result))
+        return
+    rows = zip(result["input_deg"], result["points"], result["assembly"], strict=True)
+    if as_csv:
+        out = ["input_deg,x,y,assembly"]
+        for deg, xy, asm in rows:
+            x, y = ("", "") if xy is None else (repr(xy[0]), repr(xy[1]))
+            out.append(f"{deg!r},{x},{y},{asm}")
+        sys.stdout.write("\n".join(out) + "\n")
+        return
+    turn = "the input turns fully" if result["full_turn"] else "the input rocks between its limits"
+    out = [_heading(doc), f"# path of {result['joint']} over the closed circuit; {turn}"]
+    out.append(f"{'input_deg':>10} {'x':>11} {'y':>11} {'assembly':>9}")
+    for deg, xy, asm in rows:
+        x, y = (None, None) if xy is None else xy
+        out.append(f"{_fmt(deg, 10, 3)} {_fmt(x)} {_fmt(y)} {asm:>+9d}")
+    sys.stdout.write("\n".join(out) + "\n")
+
+
+def curve_document(doc: Document, points: int = 360) -> dict[str, Any]:
+    """The ``curve`` command's JSON-ready result: the traced point over the closed circuit."""
+    import numpy as np
+
+    from linkwright.io.documents import tidy_number
+    from linkwright.mechanisms import circuit, input_range
+
+    mech = doc.mechanism
+    motion = circuit(mech, points, order=0)
+    if not bool(np.any(motion.valid)):
+        raise CliError(f"{doc.family}: the linkage cannot be assembled at any input")
+    joint = mech.traced_joint
+    dyads = mech.plan.dyads
+    if dyads:
+        branch = np.broadcast_to(motion.branches[dyads[0].name], motion.input.shape)
+    else:
+        branch = np.ones(motion.input.shape)
+    return {
+        "family": doc.family,
+        "joint": joint,
+        "closed": True,
+        "full_turn": bool(np.all(input_range(mech).full)),
+        "points": [_xy(p) for p in motion.positions[joint]],
+        # Degrees as a person would write them: 30, not the 29.999999999999996 of a round trip.
+        "input_deg": [tidy_number(float(d)) for d in np.degrees(motion.input)],
+        "assembly": [int(b) for b in branch],
+    }
+
+
+@app.command()
+def analyze(file: FileArg, as_json: JsonOpt = False) -> None:
+    """Type, ranges, transmission angle, time ratio and coefficients of the mechanism."""
+    doc = _load(file)
+    try:
+        from linkwright.analysis import analyze as run_analysis
+    except ImportError as exc:
+        raise CliError(f"the analysis module is not available ({exc})") from None
+    result = _jsonable(run_analysis(doc.mechanism))
+    if as_json:
+        sys.stdout.write(_dump(result))
+        return
+    lines = [_heading(doc)]
+    _table_lines(result, lines, indent=0)
+    sys.stdout.write("\n".join(lines) + "\n")
+
+
+def _table_lines(data: Mapping[str, Any], lines: list[str], indent: int) -> None:
+    width = max((len(str(k)) for k in data), default=0)
+    pad = " " * indent
+    for key, value in data.items():
+        if isinstance(value, Mapping):
+            lines.append(f"{pad}{key}:")
+            _table_lines(value, lines, indent + 2)
+        else:
+            lines.append(f"{pad}{key:<{width}}  {_show_value(value)}")
+
+
+def _show_value(value: Any) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{value + 0.0:.6g}"  # + 0.0: no "-0"
+    if isinstance(value, list):
+        return "[" + ", ".join(_show_value(v) for v in value) + "]"
+    return str(value)
+
+
+@app.command()
+def demo(
+    out: Annotated[
+        Path, typer.Option("--out", metavar="DIR", help="Folder to write the demo's files into.")
+    ] = Path("out"),
+) -> None:
+    """Run the bundled demonstration, writing its figures and tables into DIR."""
+    try:
+        from linkwright.demo import run_demo
+    except ImportError as exc:
+        raise CliError(f"the demo is not available ({exc})") from None
+    result = run_demo(out)
+    if result is None:
+        return
+    if isinstance(result, str | os.PathLike):
+        sys.stdout.write(f"{os.fspath(result)}\n")
+    elif isinstance(result, Mapping):
+        lines: list[str] = []
+        _table_lines(_jsonable(result), lines, 0)
+        sys.stdout.write("\n".join(lines) + "\n")
+    elif isinstance(result, list | tuple | set):
+        sys.stdout.write("".join(f"{_jsonable(item)}\n" for item in result))
+    else:
+        sys.stdout.write(f"{result}\n")
+
+
+# --------------------------------------------------------------------------------------------
+# Entry point
+# --------------------------------------------------------------------------------------------
+
+
+def _fail(message: str, status: int = 2) -> int:
+    line = " ".join(str(message).split())  # one line, whatever the message held
+    sys.stderr.write(f"error: {line}\n")
+    return status
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line with ``argv`` (default: ``sys.argv[1:]``); return the exit status.
+
+    Click's own error display (usage block plus message) is replaced by one ``error:`` line, and
+    every expected failure (bad file, bad document, bad option) exits with status 2.
+    """
+    from linkwright.io.documents import DocumentError
+
+    # `linkwright` alone asks for the help, which is not an error.
+    args = list(sys.argv[1:] if argv is None else argv) or ["--help"]
+    command = typer.main.get_command(app)
+    try:
+        status = command.main(args=args, prog_name="linkwright", standalone_mode=False)
+    except click_exceptions.ClickException as exc:
+        return _fail(exc.format_message())
+    except (CliError, DocumentError) as exc:
+        return _fail(str(exc))
+    except typer.Abort:
+        return _fail("aborted", 1)
+    except BrokenPipeError:
+        # The reader went away (`linkwright curve ... | head`): stop quietly, and keep Python
+        # from complaining again when it flushes stdout at exit.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
+    except OSError as exc:
+        return _fail(f"{exc.filename}: {exc.strerror}" if exc.filename else str(exc))
+    except Exception as exc:
+        if os.environ.get("LINKWRIGHT_TRACEBACK"):
+            raise
+        return _fail(
+            f"internal error: {type(exc).__name__}: {exc} "
+            "(set LINKWRIGHT_TRACEBACK=1 to see where)",
+            1,
+        )
+    return status if isinstance(status, int) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

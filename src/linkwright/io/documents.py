@@ -1,0 +1,776 @@
+"""Mechanism documents: TOML or JSON files that name a family and give its dimensions.
+
+A document speaks degrees; the mechanism objects it builds speak radians. Every field a family
+accepts is declared once, in :data:`FAMILY_SPECS`, as a *kind* (point, length, angle in degrees,
+sign, coupler point, slider line); validation, defaults, construction and the reverse conversion
+all read that one table, so a new family is a new row.
+
+Example document (TOML)::
+
+    format = "linkwright/1"
+    title = "Crank-rocker"
+
+    [mechanism]
+    family = "fourbar"
+    A0 = [0.0, 0.0]
+    B0 = [3.5, 0.0]
+    crank = 1.0
+    coupler = 5.0
+    rocker = 6.02
+    point = { u = 2.5, v = 1.5 }
+    assembly = 1
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import json
+import math
+import numbers
+import os
+import re
+import secrets
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from linkwright.mechanisms import Mechanism
+
+__all__ = [
+    "FAMILY_SPECS",
+    "FORMAT",
+    "Document",
+    "DocumentError",
+    "FamilySpec",
+    "FieldSpec",
+    "document_to_dict",
+    "dumps_toml",
+    "list_examples",
+    "load_document",
+    "load_example",
+    "mechanism_to_dict",
+    "parse_document",
+    "save_document",
+]
+
+FORMAT = "linkwright/1"
+_TOP_LEVEL = ("format", "title", "units", "mechanism")
+
+
+class DocumentError(ValueError):
+    """A document is not valid: the message names the field path and the problem.
+
+    Attributes
+    ----------
+    field : str
+        Dotted path of the offending field (``"mechanism.crank"``), or ``"document"``.
+    problem : str
+        What is wrong with it.
+    source : str or None
+        Where the document came from (a file name), when known.
+    """
+
+    def __init__(self, field: str, problem: str, source: str | None = None) -> None:
+        self.field = field
+        self.problem = problem
+        self.source = source
+        prefix = f"{source}: " if source else ""
+        super().__init__(f"{prefix}{field}: {problem}")
+
+    def with_source(self, source: str | None) -> DocumentError:
+        """The same error, attributed to ``source``."""
+        return DocumentError(self.field, self.problem, source)
+
+
+# --------------------------------------------------------------------------------------------
+# Kinds: how one document field is checked, turned into constructor arguments, and read back.
+# --------------------------------------------------------------------------------------------
+
+
+def _show(value: Any) -> str:
+    """A value as the user wrote it (JSON-ish), short enough for a one-line message."""
+    if isinstance(value, float):
+        text = repr(value)
+    elif isinstance(value, int) and not isinstance(value, bool):
+        text = str(value) if abs(value) < 10**30 else f"an integer of {len(str(abs(value)))} digits"
+    else:
+        try:
+            text = json.dumps(value, ensure_ascii=False, allow_nan=True, default=repr)
+        except (TypeError, ValueError, RecursionError):
+            text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _number(value: Any, path: str, what: str) -> float:
+    """A finite float from an int or float (bool is not a number, however Python sees it)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise DocumentError(path, f"must be {what}, got {_show(value)}")
+    try:
+        x = float(value)
+    except OverflowError:
+        raise DocumentError(path, f"must be a finite number, got {_show(value)}") from None
+    if not math.isfinite(x):
+        raise DocumentError(path, f"must be a finite number, got {_show(value)}")
+    return x
+
+
+def _table(value: Any, path: str, what: str) -> Mapping[str, Any]:
+    if not isinstance(value, Mapping):
+        raise DocumentError(path, f"must be {what}, got {_show(value)}")
+    for key in value:
+        if not isinstance(key, str):
+            raise DocumentError(path, f"keys must be strings, got {_show(key)}")
+    return value
+
+
+def _check_keys(table: Mapping[str, Any], allowed: tuple[str, ...], path: str) -> None:
+    for key in table:
+        if key not in allowed:
+            raise DocumentError(path, _unknown("field", key, allowed))
+
+
+def _unknown(noun: str, key: str, known: tuple[str, ...]) -> str:
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+    if close:
+        return f"unknown {noun} {key!r} (did you mean {close[0]!r}?)"
+    return f"unknown {noun} {key!r} (known: {', '.join(known)})"
+
+
+def _parse_point(value: Any, path: str) -> list[float]:
+    what = "a point [x, y]"
+    if not isinstance(value, list | tuple) or len(value) != 2:
+        raise DocumentError(path, f"must be {what}, got {_show(value)}")
+    return [_number(c, f"{path}[{i}]", "a number") for i, c in enumerate(value)]
+
+
+def _parse_length(value: Any, path: str) -> float:
+    x = _number(value, path, "a positive number")
+    if x <= 0:
+        raise DocumentError(path, f"must be a positive number, got {_show(value)}")
+    return x
+
+
+def _parse_angle(value: Any, path: str) -> float:
+    return _number(value, path, "an angle in degrees")
+
+
+def _parse_sign(value: Any, path: str) -> int:
+    x = _number(value, path, "1 or -1")
+    if x not in (1.0, -1.0):
+        raise DocumentError(path, f"must be 1 or -1, got {_show(value)}")
+    return int(x)
+
+
+def _parse_uv(value: Any, path: str) -> dict[str, float]:
+    table = _table(value, path, "a table {u = .., v = ..}")
+    _check_keys(table, ("u", "v"), path)
+    # Either coordinate may be left out: a point on the A→B line needs only u.
+    return {k: _number(table.get(k, 0.0), f"{path}.{k}", "a number") for k in ("u", "v")}
+
+
+def _parse_line(value: Any, path: str) -> dict[str, Any]:
+    table = _table(value, path, "a table {point = [x, y], angle = ..}")
+    _check_keys(table, ("point", "angle"), path)
+    for key in ("point", "angle"):
+        if key not in table:
+            raise DocumentError(f"{path}.{key}", "missing required field")
+    return {
+        "point": _parse_point(table["point"], f"{path}.point"),
+        "angle": _parse_angle(table["angle"], f"{path}.angle"),
+    }
+
+
+def tidy_number(x: float, ulps: int = 4) -> float:
+    """The shortest decimal within a few units in the last place of ``x``, else ``x`` itself.
+
+    A degrees→radians→degrees trip leaves last-bit noise (30 comes back as 29.999999999999996);
+    this undoes it without touching any digit that carries information.
+
+    >>> tidy_number(29.999999999999996), tidy_number(-106.0684593829853)
+    (30.0, -106.0684593829853)
+    """
+    if not math.isfinite(x):
+        return x
+    tol = ulps * math.ulp(x)
+    for places in range(16):
+        nice = round(x, places)
+        if abs(nice - x) <= tol:
+            return nice
+    return x
+
+
+def _deg(rad: float) -> float:
+    return tidy_number(math.degrees(rad))
+
+
+def _scalar(mech: Any, attr: str) -> float:
+    import numpy as np
+
+    value = np.asarray(getattr(mech, attr), dtype=float)
+    if value.shape != ():
+        raise DocumentError(attr, f"must be a single value to be written, got shape {value.shape}")
+    return float(value)
+
+
+def _pair(mech: Any, attr: str) -> list[float]:
+    import numpy as np
+
+    value = np.asarray(getattr(mech, attr), dtype=float)
+    if value.shape != (2,):
+        raise DocumentError(attr, f"must be a single point to be written, got shape {value.shape}")
+    return [float(value[0]), float(value[1])]
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One kind of document field.
+
+    Attributes
+    ----------
+    describe : what a valid value looks like (for messages).
+    parse : (raw value, path) → canonical document value; raises :class:`DocumentError`.
+    to_kwargs : (canonical value, constructor attribute names) → constructor arguments.
+    from_mech : (mechanism, attribute names) → canonical document value.
+    """
+
+    describe: str
+    parse: Callable[[Any, str], Any]
+    to_kwargs: Callable[[Any, tuple[str, ...]], dict[str, Any]]
+    from_mech: Callable[[Any, tuple[str, ...]], Any]
+
+
+KINDS: dict[str, Kind] = {
+    "point": Kind(
+        "a point [x, y]",
+        _parse_point,
+        lambda v, a: {a[0]: tuple(v)},
+        lambda m, a: _pair(m, a[0]),
+    ),
+    "length": Kind(
+        "a positive number",
+        _parse_length,
+        lambda v, a: {a[0]: v},
+        lambda m, a: _scalar(m, a[0]),
+    ),
+    "angle_deg": Kind(
+        "an angle in degrees",
+        _parse_angle,
+        lambda v, a: {a[0]: math.radians(v)},
+        lambda m, a: _deg(_scalar(m, a[0])),
+    ),
+    "sign": Kind(
+        "1 or -1",
+        _parse_sign,
+        lambda v, a: {a[0]: float(v)},
+        lambda m, a: int(_scalar(m, a[0])),
+    ),
+    "uv": Kind(
+        "a table {u = .., v = ..}",
+        _parse_uv,
+        lambda v, a: {a[0]: v["u"], a[1]: v["v"]},
+        lambda m, a: {"u": _scalar(m, a[0]), "v": _scalar(m, a[1])},
+    ),
+    "line": Kind(
+        "a table {point = [x, y], angle = ..}",
+        _parse_line,
+        lambda v, a: {a[0]: tuple(v["point"]), a[1]: math.radians(v["angle"])},
+        lambda m, a: {"point": _pair(m, a[0]), "angle": _deg(_scalar(m, a[1]))},
+    ),
+}
+
+
+@dataclass(frozen=True)
+class FieldSpec:
+    """A family field: its document name, kind, constructor attributes and default.
+
+    ``attrs`` defaults to ``(name,)``; ``default`` of ``None`` makes the field required.
+    """
+
+    name: str
+    kind: str
+    attrs: tuple[str, ...] = ()
+    default: Any = None
+
+    @property
+    def targets(self) -> tuple[str, ...]:
+        return self.attrs or (self.name,)
+
+
+@dataclass(frozen=True)
+class FamilySpec:
+    """A family's document schema: its fields and the pairs of points that must differ."""
+
+    fields: tuple[FieldSpec, ...]
+    distinct: tuple[tuple[str, str, str], ...] = ()
+    """(field, other field, why) for points that may not coincide."""
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(f.name for f in self.fields)
+
+
+FAMILY_SPECS: dict[str, FamilySpec] = {
+    "fourbar": FamilySpec(
+        fields=(
+            FieldSpec("A0", "point"),
+            FieldSpec("B0", "point"),
+            FieldSpec("crank", "length"),
+            FieldSpec("coupler", "length"),
+            FieldSpec("rocker", "length"),
+            FieldSpec("point", "uv", ("u", "v"), {"u": 0.0, "v": 0.0}),
+            FieldSpec("assembly", "sign", default=1),
+        ),
+        distinct=(("B0", "A0", "the frame A0B0 must have a positive length"),),
+    ),
+    "slidercrank": FamilySpec(
+        fields=(
+            FieldSpec("A0", "point"),
+            FieldSpec("crank", "length"),
+            FieldSpec("rod", "length"),
+            FieldSpec("line", "line", ("line_point", "line_angle")),
+            FieldSpec("point", "uv", ("u", "v"), {"u": 0.0, "v": 0.0}),
+            FieldSpec("assembly", "sign", default=1),
+        ),
+    ),
+}
+
+
+def _mechanism_class(family: str) -> type[Mechanism]:
+    from linkwright.mechanisms import FAMILIES
+
+    return FAMILIES[family]
+
+
+# --------------------------------------------------------------------------------------------
+# Documents
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Document:
+    """A validated mechanism document.
+
+    Attributes
+    ----------
+    title, units : optional display strings.
+    family : the family name (a key of :data:`FAMILY_SPECS`).
+    mechanism : the mechanism object built from the document (radians inside).
+    raw : the validated document as a mapping, every default filled in (degrees).
+
+    Two documents are equal when their validated mappings are: the mechanism is derived from
+    ``raw``, and its array fields do not compare to a single truth value.
+    """
+
+    title: str | None
+    units: str | None
+    family: str
+    mechanism: Mechanism = field(compare=False, repr=False)
+    raw: dict[str, Any] = field(repr=False)
+
+
+def parse_document(mapping: Any, source: str | None = None) -> Document:
+    """Validate a document mapping (as parsed from TOML or JSON) and build its mechanism.
+
+    Parameters
+    ----------
+    mapping : the parsed document.
+    source : where it came from, prefixed to error messages.
+
+    Returns
+    -------
+    Document
+
+    Raises
+    ------
+    DocumentError
+        On the first problem found, naming its field path.
+
+    Examples
+    --------
+    >>> doc = parse_document({"format": "linkwright/1", "mechanism": {
+    ...     "family": "slidercrank", "A0": [0, 0], "crank": 1, "rod": 3,
+    ...     "line": {"point": [0, 0], "angle": 90}}})
+    >>> doc.family, round(float(doc.mechanism.line_angle), 6)
+    ('slidercrank', 1.570796)
+    >>> parse_document({"format": "linkwright/1", "mechanism": {
+    ...     "family": "fourbar", "crnak": 1}})
+    Traceback (most recent call last):
+    ...
+    linkwright.io.documents.DocumentError: mechanism: unknown field 'crnak' (did you mean 'crank'?)
+    """
+    try:
+        raw = _validate(mapping)
+        mechanism = _build(raw["mechanism"])
+    except DocumentError as exc:
+        raise exc.with_source(source) from None
+    except RecursionError:
+        raise DocumentError("document", "is nested too deeply", source) from None
+    return Document(
+        title=raw.get("title"),
+        units=raw.get("units"),
+        family=raw["mechanism"]["family"],
+        mechanism=mechanism,
+        raw=raw,
+    )
+
+
+def _text(value: Any, path: str) -> str:
+    if not isinstance(value, str):
+        raise DocumentError(path, f"must be a string, got {_show(value)}")
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        raise DocumentError(path, "must be valid Unicode text (it has a lone surrogate)") from None
+    return value
+
+
+def _validate(mapping: Any) -> dict[str, Any]:
+    doc = _table(mapping, "document", "a table")
+    _check_keys(doc, _TOP_LEVEL, "document")
+    if "format" not in doc:
+        raise DocumentError("format", f'missing required field (expected "{FORMAT}")')
+    if doc["format"] != FORMAT:
+        raise DocumentError("format", f'expected "{FORMAT}", got {_show(doc["format"])}')
+    out: dict[str, Any] = {"format": FORMAT}
+    for key in ("title", "units"):
+        if key in doc:
+            out[key] = _text(doc[key], key)
+    if "mechanism" not in doc:
+        raise DocumentError("mechanism", "missing required table")
+    out["mechanism"] = _validate_mechanism(doc["mechanism"])
+    return out
+
+
+def _validate_mechanism(value: Any) -> dict[str, Any]:
+    mech = _table(value, "mechanism", "a table")
+    known = tuple(FAMILY_SPECS)
+    if "family" not in mech:
+        raise DocumentError(
+            "mechanism.family", f"missing required field (one of {', '.join(known)})"
+        )
+    family = mech["family"]
+    if not isinstance(family, str):
+        raise DocumentError("mechanism.family", f"must be a string, got {_show(family)}")
+    if family not in FAMILY_SPECS:
+        raise DocumentError("mechanism.family", _unknown("family", family, known))
+    spec = FAMILY_SPECS[family]
+    _check_keys(mech, ("family", *spec.names), "mechanism")
+    out: dict[str, Any] = {"family": family}
+    for f in spec.fields:
+        path = f"mechanism.{f.name}"
+        kind = KINDS[f.kind]
+        if f.name in mech:
+            out[f.name] = kind.parse(mech[f.name], path)
+        elif f.default is None:
+            raise DocumentError(path, f"missing required field ({kind.describe})")
+        else:
+            out[f.name] = copy.deepcopy(f.default)
+    for name, other, why in spec.distinct:
+        if out[name] == out[other]:
+            raise DocumentError(f"mechanism.{name}", f"coincides with mechanism.{other} ({why})")
+    return out
+
+
+def _build(mech: Mapping[str, Any]) -> Mechanism:
+    from linkwright.mechanisms import InvalidMechanism
+
+    family = mech["family"]
+    kwargs: dict[str, Any] = {}
+    for f in FAMILY_SPECS[family].fields:
+        kwargs.update(KINDS[f.kind].to_kwargs(mech[f.name], f.targets))
+    try:
+        return _mechanism_class(family)(**kwargs)
+    except InvalidMechanism as exc:
+        # The checks above should leave nothing for the constructor to refuse; if they ever do,
+        # its message (which names the constructor field) still reaches the user as a document
+        # error.
+        raise DocumentError("mechanism", str(exc)) from None
+
+
+def document_to_dict(doc: Document) -> dict[str, Any]:
+    """The document as a plain, JSON/TOML-ready mapping (degrees), every default filled in."""
+    return copy.deepcopy(doc.raw)
+
+
+def mechanism_to_dict(mech: Mechanism, title: str | None = None) -> dict[str, Any]:
+    """A document mapping for one mechanism object (its radians written back as degrees).
+
+    Parameters
+    ----------
+    mech : a single (not batched) mechanism of a family in :data:`FAMILY_SPECS`.
+    title : optional document title.
+
+    Raises
+    ------
+    DocumentError
+        For an unknown family or a batched mechanism.
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import SliderCrank
+    >>> import math
+    >>> d = mechanism_to_dict(SliderCrank(A0=[0, 0], crank=1, rod=3, line_angle=math.pi / 6))
+    >>> d["mechanism"]["line"]
+    {'point': [0.0, 0.0], 'angle': 30.0}
+    """
+    family = getattr(mech, "family", None)
+    if family not in FAMILY_SPECS:
+        known = tuple(FAMILY_SPECS)
+        raise DocumentError("mechanism.family", _unknown("family", str(family), known))
+    body: dict[str, Any] = {"family": family}
+    for f in FAMILY_SPECS[family].fields:
+        try:
+            body[f.name] = KINDS[f.kind].from_mech(mech, f.targets)
+        except DocumentError as exc:
+            raise DocumentError(f"mechanism.{f.name}", exc.problem) from None
+    out: dict[str, Any] = {"format": FORMAT}
+    if title is not None:
+        out["title"] = title
+    out["mechanism"] = body
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Files
+# --------------------------------------------------------------------------------------------
+
+_SUFFIXES = (".toml", ".json")
+
+
+def _suffix(path: Path) -> str:
+    suffix = path.suffix.lower()
+    if suffix not in _SUFFIXES:
+        raise DocumentError(
+            "document",
+            f"unknown file type {path.suffix or '(none)'!r}: expected .toml or .json",
+            str(path),
+        )
+    return suffix
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            # Python's json keeps the last of duplicate keys silently; a document with two
+            # values for one field is ambiguous, so refuse it as TOML does.
+            raise DocumentError("document", f"duplicate key {key!r}")
+        out[key] = value
+    return out
+
+
+def _parse_text(text: str, suffix: str, source: str) -> Any:
+    if suffix == ".toml":
+        try:
+            return tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            # The parser's message already ends with "(at line L, column C)".
+            raise DocumentError("document", f"invalid TOML: {exc}", source) from None
+    try:
+        return json.loads(text, object_pairs_hook=_no_duplicates)
+    except json.JSONDecodeError as exc:
+        where = f"(at line {exc.lineno}, column {exc.colno})"
+        raise DocumentError("document", f"invalid JSON: {exc.msg} {where}", source) from None
+    except DocumentError as exc:
+        raise exc.with_source(source) from None
+    except RecursionError:
+        raise DocumentError("document", "invalid JSON: nested too deeply", source) from None
+
+
+def load_document(path: str | os.PathLike[str]) -> Document:
+    """Read and validate a ``.toml`` or ``.json`` mechanism document.
+
+    Raises
+    ------
+    DocumentError
+        For an unknown extension, an unreadable or malformed file, or an invalid document.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise DocumentError("document", f"cannot read: {exc.strerror or exc}", str(path)) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DocumentError(
+            "document", f"not UTF-8 text (byte {exc.start} is {data[exc.start]:#04x})", str(path)
+        ) from None
+    return parse_document(_parse_text(text, suffix, str(path)), source=str(path))
+
+
+def save_document(doc: Document | Mapping[str, Any], path: str | os.PathLike[str]) -> Path:
+    """Write a document as TOML or JSON (by extension), atomically.
+
+    A mapping is validated first, so only valid documents are ever written, in canonical form
+    (every default filled in). The file is written to a temporary file in the same directory,
+    flushed and fsynced, then renamed over ``path``: a reader never sees a half-written file and
+    a crash leaves the old one intact.
+
+    Returns
+    -------
+    Path
+        The path written.
+    """
+    path = Path(path)
+    suffix = _suffix(path)
+    if not isinstance(doc, Document):
+        doc = parse_document(doc)
+    data = document_to_dict(doc)
+    if suffix == ".toml":
+        text = dumps_toml(data)
+    else:
+        text = json.dumps(data, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+    _atomic_write(path, text.encode("utf-8"))
+    return path
+
+
+def _atomic_write(path: Path, payload: bytes) -> None:
+    directory = path.parent
+    tmp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    # 0o666 through os.open lets the umask decide the mode, as for any newly created file.
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(payload)
+            fh.flush()
+            os.fsync(fh.fileno())
+        if path.exists():
+            os.chmod(tmp, path.stat().st_mode & 0o7777)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    # Make the rename itself durable; not every platform lets a directory be opened.
+    try:
+        dir_fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(dir_fd)
+    except OSError:
+        pass
+    finally:
+        os.close(dir_fd)
+
+
+# --------------------------------------------------------------------------------------------
+# TOML writing: documents are a few scalars and one table of numbers, points and inline tables,
+# so a small writer covers them and keeps points and (u, v) pairs on one line each.
+# --------------------------------------------------------------------------------------------
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+_ESCAPES = {
+    '"': '\\"',
+    "\\": "\\\\",
+    "\b": "\\b",
+    "\t": "\\t",
+    "\n": "\\n",
+    "\f": "\\f",
+    "\r": "\\r",
+}
+
+
+def _toml_string(s: str) -> str:
+    out = []
+    for ch in s:
+        if ch in _ESCAPES:
+            out.append(_ESCAPES[ch])
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(key: str) -> str:
+    return key if _BARE_KEY.fullmatch(key) else _toml_string(key)
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"cannot write the non-finite number {value!r}")
+        return repr(value)
+    if isinstance(value, str):
+        return _toml_string(value)
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, Mapping):
+        items = ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items())
+        return "{ " + items + " }" if items else "{}"
+    raise TypeError(f"cannot write {type(value).__name__} as TOML")
+
+
+def dumps_toml(data: Mapping[str, Any]) -> str:
+    """TOML text for a document mapping: scalars first, then one ``[table]`` per mapping.
+
+    >>> print(dumps_toml({"format": "linkwright/1", "mechanism": {"A0": [0.0, 1.0]}}))
+    format = "linkwright/1"
+    <BLANKLINE>
+    [mechanism]
+    A0 = [0.0, 1.0]
+    <BLANKLINE>
+    """
+    lines = [
+        f"{_toml_key(k)} = {_toml_value(v)}" for k, v in data.items() if not isinstance(v, Mapping)
+    ]
+    for key, table in data.items():
+        if isinstance(table, Mapping):
+            lines += ["", f"[{_toml_key(key)}]"]
+            lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in table.items()]
+    return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------------------------
+# Bundled examples
+# --------------------------------------------------------------------------------------------
+
+
+def _examples_dir() -> Any:
+    return resources.files("linkwright").joinpath("examples")
+
+
+def list_examples() -> list[str]:
+    """Names of the bundled example documents (without extension), sorted.
+
+    >>> "crank-rocker" in list_examples()
+    True
+    """
+    return sorted(
+        entry.name.removesuffix(".toml")
+        for entry in _examples_dir().iterdir()
+        if entry.name.endswith(".toml")
+    )
+
+
+def load_example(name: str) -> Document:
+    """Load a bundled example by name (``"crank-rocker"`` or ``"crank-rocker.toml"``).
+
+    Raises
+    ------
+    DocumentError
+        For an unknown name.
+
+    Examples
+    --------
+    >>> load_example("double-crank").family
+    'fourbar'
+    """
+    stem = name.removesuffix(".toml")
+    known = tuple(list_examples())
+    if stem not in known:
+        raise DocumentError("example", _unknown("example", stem, known))
+    text = _examples_dir().joinpath(f"{stem}.toml").read_text(encoding="utf-8")
+    source = f"example {stem}"
+    return parse_document(_parse_text(text, ".toml", source), source=source)
