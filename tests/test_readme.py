@@ -111,3 +111,12 @@ TOML_BLOCKS = [b for b in blocks("toml") if "format = " in b[2]]
 )
 def test_toml_documents_in_the_docs_are_valid(doc, line, body):
     parse_document(tomllib.loads(body), source=f"{doc}:{line}")
+
+
+@pytest.mark.parametrize(
+    ("name", "line", "body"),
+    [b for b in blocks("python") if b[0] == "README.md"],
+    ids=lambda v: str(v) if isinstance(v, int) else None,
+)
+def test_readme_python_block_runs(name: str, line: int, body: str) -> None:
+    exec(compile(body, f"{name}:{line}", "exec"), {})
