@@ -18,7 +18,7 @@ traced curve is closed. :func:`trace` samples that whole closed path with every 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -96,50 +96,142 @@ def _thresholds(dyad: DyadRRR | DyadRRP, params) -> tuple[Array, Array]:
     return -r, r
 
 
+def _turning(plan: Plan, name: str, params) -> tuple[Array, Array]:
+    """A ground pivot or crank joint as ``O + w·e^{iθ}`` (complex): its pivot O and arm w."""
+    step = plan.step(name)
+    if isinstance(step, Fixed):
+        pivot, arm = step.at, np.complex128(0.0)
+    else:
+        pivot = plan.step(step.pivot).at
+        length = np.asarray(params[step.length] if isinstance(step.length, str) else step.length)
+        phase = np.asarray(params[step.phase] if isinstance(step.phase, str) else step.phase)
+        arm = length * np.exp(1j * phase)
+    o = np.asarray(params[pivot], dtype=float)
+    return o[..., 0] + 1j * o[..., 1], arm
+
+
 def _analytic_arcs(plan: Plan, params, points) -> InputArcs:
+    """Closed-form arcs from q(θ) = c0 + amp·cos(θ − ψ), in half-angle form.
+
+    The arc ends are ``ψ ± a_in`` (where q reaches its upper threshold) and ``ψ ± a_out`` (its
+    lower one), with ``sin²(a_in/2) = s_hi`` and ``cos²(a_out/2) = c_lo``. For an RRR dyad both
+    come as products of differences of the lengths themselves, q(θ) = (a + b)² − 4ab·sin²(x/2)
+    = (a − b)² + 4ab·cos²(x/2) with a = |pivot difference| and b = |arm difference|: no
+    cancellation between the large c0 and a small threshold, and no rounding from the
+    placement of the frame, so a limit is as exact as its data allow.
+    """
     (dyad,) = plan.dyads
-    _, states = place_all(plan, params, np.array([0.0, 0.5 * np.pi, np.pi]), points=points, order=0)
-    q = _closure(plan, dyad, states, params, points)
-    c0 = 0.5 * (q[..., 0] + q[..., 2])
-    c1 = 0.5 * (q[..., 0] - q[..., 2])
-    c2 = q[..., 1] - c0
-    amp = np.hypot(c1, c2)
-    psi = np.arctan2(c2, c1)
     t_lo, t_hi = _thresholds(dyad, params)
-    t_lo, t_hi = np.broadcast_arrays(t_lo, t_hi, c0)[:2]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xa = (t_lo - c0) / amp  # need cos(θ − ψ) ≥ xa
-        xb = (t_hi - c0) / amp  # and cos(θ − ψ) ≤ xb
+    if isinstance(dyad, DyadRRR):
+        o1, w1 = _turning(plan, dyad.p1, params)
+        o2, w2 = _turning(plan, dyad.p2, params)
+        big, arm = o2 - o1, w2 - w1
+        a, b = np.abs(big), np.abs(arm)
+        psi = np.angle(big) - np.angle(arm)  # q is largest where the two line up
+        c0, amp = a * a + b * b, 2.0 * a * b
+        r1, r2 = (np.asarray(params[r] if isinstance(r, str) else r) for r in (dyad.r1, dyad.r2))
+        outer, inner = r1 + r2, np.abs(r1 - r2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s_hi = (a + b - outer) * (a + b + outer) / (2.0 * amp)
+            c_lo = (inner - np.abs(a - b)) * (inner + np.abs(a - b)) / (2.0 * amp)
+    else:
+        _, states = place_all(
+            plan, params, np.array([0.0, 0.5 * np.pi, np.pi]), points=points, order=0
+        )
+        q = _closure(plan, dyad, states, params, points)
+        c0 = 0.5 * (q[..., 0] + q[..., 2])
+        c1 = 0.5 * (q[..., 0] - q[..., 2])
+        c2 = q[..., 1] - c0
+        amp = np.hypot(c1, c2)
+        psi = np.arctan2(c2, c1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s_hi = (amp - (t_hi - c0)) / (2.0 * amp)  # need sin²((θ − ψ)/2) ≥ s_hi
+            c_lo = (amp + (t_lo - c0)) / (2.0 * amp)  # and cos²((θ − ψ)/2) ≥ c_lo
+    t_lo, t_hi, psi, s_hi, c_lo = np.broadcast_arrays(t_lo, t_hi, psi, s_hi, c_lo)
     flat = amp <= 1e-15 * np.maximum(np.abs(c0), np.abs(t_hi))
     const_ok = (c0 >= t_lo) & (c0 <= t_hi)
-    never = np.where(flat, ~const_ok, (xa > 1.0) | (xb < -1.0) | (xa > xb))
-    full = np.where(flat, const_ok, (xa <= -1.0) & (xb >= 1.0))
-    a_in = np.arccos(np.clip(xb, -1.0, 1.0))  # |θ − ψ| ≥ a_in
-    a_out = np.arccos(np.clip(xa, -1.0, 1.0))  # |θ − ψ| ≤ a_out
+    never = np.where(flat, ~const_ok, (s_hi > 1.0) | (c_lo > 1.0) | (s_hi + c_lo > 1.0))
+    full = np.where(flat, const_ok, (s_hi <= 0.0) & (c_lo <= 0.0))
+    a_in = 2.0 * np.arcsin(np.sqrt(np.clip(s_hi, 0.0, 1.0)))  # |θ − ψ| ≥ a_in
+    a_out = 2.0 * np.arccos(np.sqrt(np.clip(c_lo, 0.0, 1.0)))  # |θ − ψ| ≤ a_out
     shape = full.shape
     lo = np.full(shape + (2,), np.nan)
     hi = np.full(shape + (2,), np.nan)
     partial = ~(never | full)
-    one_about_psi = partial & (xb >= 1.0)  # only the lower threshold binds
-    one_about_opp = partial & (xa <= -1.0) & ~one_about_psi
+    one_about_psi = partial & (s_hi <= 0.0)  # only the lower threshold binds
+    one_about_opp = partial & (c_lo <= 0.0) & ~one_about_psi
     two = partial & ~one_about_psi & ~one_about_opp
+    # Each arc as one end plus a width ≥ 0, so that an arc shrunk to a point (a linkage touching
+    # its limit) cannot come out with hi below lo by a rounding.
     lo[..., 0] = np.where(one_about_psi, psi - a_out, np.where(one_about_opp, psi + a_in, np.nan))
     hi[..., 0] = np.where(
-        one_about_psi, psi + a_out, np.where(one_about_opp, psi + TWO_PI - a_in, np.nan)
+        one_about_psi,
+        psi + a_out,
+        np.where(one_about_opp, lo[..., 0] + (TWO_PI - 2 * a_in), np.nan),
     )
+    width = np.maximum(a_out - a_in, 0.0)
     lo[..., 0] = np.where(two, psi + a_in, lo[..., 0])
-    hi[..., 0] = np.where(two, psi + a_out, hi[..., 0])
-    lo[..., 1] = np.where(two, psi - a_out, np.nan)
+    hi[..., 0] = np.where(two, psi + a_in + width, hi[..., 0])
+    lo[..., 1] = np.where(two, psi - a_in - width, np.nan)
     hi[..., 1] = np.where(two, psi - a_in, np.nan)
     zero = np.zeros(lo.shape, dtype=np.int64)
-    return _normalised(full, never, lo, hi, zero, zero)
+    arcs = _normalised(full, never, lo, hi, zero, zero)
+    # Snap after normalising (a shift by 2π rounds, and the snapped value is the one returned);
+    # a start snapped past π is wrapped by normalising again, and snapped again.
+    for _ in range(2):
+        lo, hi = _snap_inside(plan, params, points, arcs.lo, arcs.hi)
+        if not np.any(lo > np.pi):
+            return replace(arcs, lo=lo, hi=hi)
+        arcs = _normalised(full, never, lo, hi, arcs.dyad_lo, arcs.dyad_hi)
+    return arcs
+
+
+SNAP_STEPS = 60
+
+
+def _snap_inside(plan: Plan, params, points, lo: Array, hi: Array) -> tuple[Array, Array]:
+    """Move closed-form arc ends that rounding left just outside the assembled set into it.
+
+    The closed form is exact up to rounding, but the engine places the dyad from rounded
+    positions; where that noise is larger than the assembly tolerance (a small linkage far from
+    the origin, near-change-point proportions) the limit itself would come out unassembled.
+    Such ends step toward the arc's other end by steps doubling from two ulps, never past the
+    arc's middle, until the linkage is assembled there (``valid``); an end that cannot be moved
+    inside is left as computed. Most limits need no step: one evaluation checks them all.
+    """
+    end = np.concatenate((lo, hi), axis=-1)
+    other = np.concatenate((hi, lo), axis=-1)
+    theta = end.copy()
+    active = np.isfinite(end) & np.isfinite(other)
+    direction = np.sign(other - end)
+    middle = 0.5 * (end + other)
+    step = 2.0 * np.spacing(np.maximum(np.abs(end), 1.0))
+    for _ in range(SNAP_STEPS):
+        if not active.any():
+            break
+        _, states = place_all(plan, params, np.where(active, theta, 0.0), points=points, order=0)
+        ok = np.logical_and.reduce([states[d.name].valid for d in plan.dyads])
+        active = active & ~np.broadcast_to(ok, theta.shape)
+        moved = theta + direction * step
+        past = active & ((moved - middle) * direction >= 0.0)
+        theta = np.where(active & ~past, moved, theta)
+        theta = np.where(past, end, theta)
+        active = active & ~past
+        step = 2.0 * step
+    theta = np.where(active, end, theta)
+    k = lo.shape[-1]
+    return theta[..., :k], theta[..., k:]
 
 
 def _normalised(full, never, lo, hi, dyad_lo, dyad_hi) -> InputArcs:
     """Put each arc's start in (−π, π] and order arcs by start; padding last."""
-    shift = TWO_PI * np.ceil((lo - np.pi) / TWO_PI)
-    lo = lo - shift
-    hi = hi - shift
+    # Starts already in range stay bit-for-bit; a shift rounds, and can land a start on −π or a
+    # hair above π (−π + 1 ulp goes to π + 1 ulp via (lo − π)/2π = −1): one more turn then.
+    inside = (lo > -np.pi) & (lo <= np.pi)
+    shift = np.where(inside, 0.0, TWO_PI * np.ceil((lo - np.pi) / TWO_PI))
+    lo, hi = lo - shift, hi - shift
+    turn = np.where(lo > np.pi, TWO_PI, np.where(lo <= -np.pi, -TWO_PI, 0.0))
+    lo, hi = lo - turn, hi - turn
     order = np.argsort(np.where(np.isfinite(lo), lo, np.inf), axis=-1)
 
     def take(a):
@@ -180,14 +272,16 @@ def _numeric_arcs(plan, params, points, branches, grid: int = GRID) -> InputArcs
     never = ~ok.any(axis=-1)
     if kmax == 0:
         nanpad = np.full(shape + (1,), np.nan)
-        return InputArcs(full, never, nanpad, nanpad.copy(), np.full(shape + (1,), -1),
-                         np.full(shape + (1,), -1))
+        return InputArcs(
+            full, never, nanpad, nanpad.copy(), np.full(shape + (1,), -1), np.full(shape + (1,), -1)
+        )
     # Indices of the grid cells where the predicate changes, padded with the first one.
     idx = np.argsort(~change, axis=-1, kind="stable")[..., :kmax]
     has = np.arange(kmax) < n_change[..., None]
-    step = TWO_PI / grid
     a = theta[idx]
-    b = a + step
+    # The next node itself, not a + 2π/grid: that can round past it, and a change confined to a
+    # node (a joint passing exactly through a pivot) would fall outside its own bracket.
+    b = np.append(theta, np.pi)[idx + 1]
     entering = ~np.take_along_axis(ok, idx, -1)  # invalid → valid going up
     for _ in range(BISECTIONS):
         mid = 0.5 * (a + b)
@@ -211,8 +305,10 @@ def _numeric_arcs(plan, params, points, branches, grid: int = GRID) -> InputArcs
         gap = (hi_cand - lo[..., i : i + 1]) % TWO_PI
         gap = np.where(np.isfinite(gap), gap, np.inf)
         j = np.argmin(gap, axis=-1)
-        g = np.take_along_axis(gap, j[..., None], -1)[..., 0]
-        hi[..., i] = np.where(np.isfinite(lo[..., i]), lo[..., i] + g, np.nan)
+        end = np.take_along_axis(hi_cand, j[..., None], -1)[..., 0]
+        # The bisected end itself (unrounded by lo + gap), a turn up where it lies below lo.
+        end = np.where(end > lo[..., i], end, end + TWO_PI)
+        hi[..., i] = np.where(np.isfinite(lo[..., i]), end, np.nan)
         dyad_hi[..., i] = np.take_along_axis(which, j[..., None], -1)[..., 0]
     return _normalised(full, never, lo, hi, np.where(has & entering, which, -1), dyad_hi)
 
@@ -288,7 +384,9 @@ def trace(
     w = np.concatenate((np.arange(n_up) / n_up, 1.0 - np.arange(n_down) / max(n_down, 1)))
     down = np.concatenate((np.zeros(n_up, bool), np.ones(n_down, bool)))
     arc_theta = lo[..., None] * (1.0 - w) + hi[..., None] * w
-    theta = np.where(arcs.full[..., None], full_theta, np.where(have_arc[..., None], arc_theta, 0.0))
+    theta = np.where(
+        arcs.full[..., None], full_theta, np.where(have_arc[..., None], arc_theta, 0.0)
+    )
     branches = None
     if plan.dyads:
         dyad = plan.dyads[0]

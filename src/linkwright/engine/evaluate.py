@@ -109,8 +109,11 @@ def place_all(
     shape = np.broadcast_shapes(batch_shape(params, points) + (1,), theta.shape)
     theta = np.broadcast_to(theta, shape)
     ctx = _Context(params, theta, branches or {}, order)
-    for step in plan.steps:
-        ctx.states[step.name] = step.place(ctx)
+    # At (near-)singular samples the derivatives overflow to inf; those samples are masked as
+    # not regular, so the overflow is expected and not worth a warning.
+    with np.errstate(over="ignore"):
+        for step in plan.steps:
+            ctx.states[step.name] = step.place(ctx)
     return theta, ctx.states
 
 

@@ -43,6 +43,10 @@ Param = str | float
 # as singular: the relative error of the derivatives grows like eps/sin², so past 1e-8 they are
 # no longer trustworthy and are reported as masked rather than as large wrong numbers.
 SINGULAR_SIN = 1e-8
+# The same bound on the dyad's own margin (sin² of the angle at its first pivot, or cos² of a
+# rod's angle to its guide): an exact limit position has margin ~1e-16 yet passes the test above
+# by rounding, and its derivatives (infinite in truth) would come out as huge finite numbers.
+SINGULAR_MARGIN = 1e-12
 # A dyad whose normalised discriminant is above -ASSEMBLY_TOL still closes (rounding at an exact
 # limit position must not turn the limit itself into a failure); the clamp leaves a constraint
 # residual of the same relative size, far below the 1e-10 promised.
@@ -176,16 +180,19 @@ class DyadRRR:
         with np.errstate(divide="ignore", invalid="ignore"):
             margin = outer * inner / (4.0 * d2 * r1 * r1)  # = h²/r1² = sin² of the angle at p1
             d = np.sqrt(d2)
-            a = (r1 * r1 - r2 * r2 + d2) / (2.0 * d)
+            a = ((r1 - r2) * (r1 + r2) + d2) / (2.0 * d)  # r1² − r2² factored: exact as r1 → r2
             h = r1 * np.sqrt(np.clip(margin, 0.0, None))
-            pos = j1.pos + (a[..., None] * delta + (sign * h)[..., None] * plane.perp(delta)) / (
-                d[..., None]
+            pos = (
+                j1.pos
+                + (a[..., None] * delta + (sign * h)[..., None] * plane.perp(delta))
+                / (d[..., None])
             )
         valid = j1.valid & j2.valid & (margin >= -ASSEMBLY_TOL) & (d2 > 0)
         pos = np.where(valid[..., None], pos, np.nan)
         rel1, rel2 = pos - j1.pos, pos - j2.pos
         det_rel = plane.cross(rel1, rel2) / (r1 * r2)
         regular = valid & j1.regular & j2.regular & (np.abs(det_rel) > SINGULAR_SIN)
+        regular &= margin > SINGULAR_MARGIN
         vel = acc = None
         if ctx.order >= 1:
             vel, _ = plane.solve_2x2_rows(
@@ -241,11 +248,10 @@ class DyadRRP:
         rel1 = pos - j1.pos
         det_rel = plane.cross(rel1, n) / r
         regular = valid & j1.regular & jl.regular & (np.abs(det_rel) > SINGULAR_SIN)
+        regular &= margin > SINGULAR_MARGIN
         vel = acc = None
         if ctx.order >= 1:
-            vel, _ = plane.solve_2x2_rows(
-                rel1, n, plane.dot(rel1, j1.vel), plane.dot(n, jl.vel)
-            )
+            vel, _ = plane.solve_2x2_rows(rel1, n, plane.dot(rel1, j1.vel), plane.dot(n, jl.vel))
         if ctx.order >= 2:
             w1 = vel - j1.vel
             acc, _ = plane.solve_2x2_rows(
@@ -326,7 +332,8 @@ class Plan:
             for parent in step.parents:
                 if parent not in known:
                     raise ValueError(
-                        f"joint {step.name!r} is built from {parent!r}, which is not placed before it"
+                        f"joint {step.name!r} is built from {parent!r}, "
+                        "which is not placed before it"
                     )
             known.add(step.name)
         for name in self.traced:

@@ -138,7 +138,9 @@ def configurations(
     return out
 
 
-def circuit(mechanism: Mechanism, samples: int = 360, *, order: int = 2, circuit: int = 0) -> Motion:
+def circuit(
+    mechanism: Mechanism, samples: int = 360, *, order: int = 2, circuit: int = 0
+) -> Motion:
     """The whole closed circuit, as the machine runs, sampled at ``samples`` inputs.
 
     Where the input turns fully this is one turn on the mechanism's assembly. Where it cannot,
@@ -169,7 +171,9 @@ def circuit(mechanism: Mechanism, samples: int = 360, *, order: int = 2, circuit
 
 def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:
     """The admissible input arcs (limit positions as exact roots) of each mechanism."""
-    return input_arcs(mechanism.plan, mechanism.params(), points=mechanism.point_fields, method=method)
+    return input_arcs(
+        mechanism.plan, mechanism.params(), points=mechanism.point_fields, method=method
+    )
 
 
 def constraint_residuals(mechanism: Mechanism, motion: Motion) -> Mapping[str, Array]:
