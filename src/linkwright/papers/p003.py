@@ -9,7 +9,7 @@ than rounded are marked so. Misprints listed in SEED-NOTES.md are marked as such
 Observations (recorded by :func:`reproduce_planar`, also in the errata):
 
 - Table 1's headings "Ψp = 30°/40°/50°" are nominal: with the printed L3 the swings are
-  33.2°, 30.7°, 30.7° / 41.0°, 40.4°, 40.3° / 51.3°, 51.2°, 51.3°, and the printed coefficients
+  33.2°, 30.7°, 30.7° / 41.0°, 41.0°, 41.0° / 51.3°, 51.2°, 51.3°. and the printed coefficients
   match the printed L3, not a swing of exactly 30°/40°/50°.
 - Table 4 was computed partly with the exact L3 = √(L4² + L1² − L2²) and partly with L3 rounded
   to 2 decimals (the L2 = 3, L1 = 5.5 row's Kp = 1.923 comes from the misprinted L3 = 4.78).
