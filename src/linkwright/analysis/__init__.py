@@ -157,7 +157,7 @@ def analyze(mechanism: Mechanism) -> dict[str, Any]:
         "min": _num(90.0 - np.degrees(tx["max"])),
         "max": _num(90.0 - np.degrees(tx["min"])),
     }
-    co = coefficients(mechanism)
+    co = coefficients(mechanism, extremes=ext)
     report["time_ratio"] = _num(co["time_ratio"])
     report["coefficients"] = {k: _num(co[k]) for k in ("K_omega", "K_epsilon", "K_p", "delta")}
     return report

@@ -15,11 +15,13 @@ from numpy.typing import NDArray
 from linkwright.engine import Motion, evaluate
 from linkwright.mechanisms.base import Mechanism, circuit
 
-__all__ = ["circuit_extremum", "golden_max"]
+__all__ = ["CIRCUIT_SAMPLES", "circuit_extremum", "golden_max"]
 
 Array = NDArray[np.float64]
 INV_PHI = (np.sqrt(5.0) - 1.0) / 2.0
 GOLDEN_STEPS = 90
+# Samples of the circuit that brackets every extremum before it is refined.
+CIRCUIT_SAMPLES = 1024
 
 
 def golden_max(f: Callable[[Array], Array], a: Array, b: Array) -> tuple[Array, Array]:
@@ -65,11 +67,14 @@ def circuit_extremum(
     quantity: Callable[[Motion], Array],
     *,
     sign: float = 1.0,
-    samples: int = 1024,
+    samples: int = CIRCUIT_SAMPLES,
+    motion: Motion | None = None,
 ) -> tuple[Array, Array, Array]:
     """The exact maximum of ``sign·quantity`` over each mechanism's whole circuit.
 
     ``quantity`` maps a :class:`Motion` of the mechanism to values with the motion's shape.
+    ``motion`` is the mechanism's circuit (order 2) when the caller already has it; several
+    extrema of one mechanism then share one tracing instead of each repeating it.
     Returns ``(value, input, branch)``: the extreme value of ``quantity`` (not multiplied by
     ``sign``), the input angle where it occurs and the dyad branch there. NaN where the linkage
     never assembles.
@@ -78,7 +83,8 @@ def circuit_extremum(
     dyad = plan.dyads[0].name
     params = mechanism.params()
     points = mechanism.point_fields
-    motion = circuit(mechanism, samples)
+    if motion is None:
+        motion = circuit(mechanism, samples)
     values = sign * quantity(motion)
     values = np.where(np.isfinite(values), values, -np.inf)
     n = motion.shape[-1]

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from linkwright.analysis.extrema import circuit_extremum
+from linkwright.analysis.extrema import CIRCUIT_SAMPLES, circuit_extremum
 from linkwright.engine import Motion, evaluate
 from linkwright.geometry import plane
 from linkwright.mechanisms import FourBar, SliderCrank, circuit, input_range
@@ -193,19 +193,20 @@ def output_rates(mechanism: Mechanism, motion: Motion) -> tuple[Array, Array]:
     return plane.dot(vel, d), plane.dot(acc, d)
 
 
-def output_extremes(mechanism: Mechanism) -> dict[str, Array]:
+def output_extremes(mechanism: Mechanism, *, motion: Motion | None = None) -> dict[str, Array]:
     """Exact extremes of the output over the circuit and the inputs where they occur.
 
     Returns ``min``, ``max``, ``min_at``, ``max_at`` (radians, or lengths for a slider) and
-    ``turns`` (True where a four-bar's output turns fully, so it has no extremes).
+    ``turns`` (True where a four-bar's output turns fully, so it has no extremes). ``motion`` is
+    the mechanism's circuit (order 2, :data:`CIRCUIT_SAMPLES`) when the caller already has it.
     """
-
-    shape = np.shape(input_range(mechanism).full)
+    if motion is None:
+        motion = circuit(mechanism, CIRCUIT_SAMPLES)
+    shape = motion.shape[:-1]
     turns = np.zeros(shape, dtype=bool)
     mid = np.zeros(shape)
     if isinstance(mechanism, FourBar):
         # The output turns fully when its angle, unwrapped along the circuit, gains 2π.
-        motion = circuit(mechanism, 1024, order=0)
         phi = np.unwrap(output_angle(mechanism, motion), axis=-1)
         turns = np.abs(phi[..., -1] - phi[..., 0] + (phi[..., 1] - phi[..., 0])) > np.pi
         # A rocking output may straddle φ3 = ±π where the wrapped angle jumps: measure it about
@@ -219,8 +220,8 @@ def output_extremes(mechanism: Mechanism) -> dict[str, Array]:
             return np.angle(np.exp(1j * (output_angle(mechanism, m) - mid[..., None])))
         return mechanism.slider_position(m)
 
-    lo, lo_at, lo_branch = circuit_extremum(mechanism, out, sign=-1.0)
-    hi, hi_at, hi_branch = circuit_extremum(mechanism, out, sign=1.0)
+    lo, lo_at, lo_branch = circuit_extremum(mechanism, out, sign=-1.0, motion=motion)
+    hi, hi_at, hi_branch = circuit_extremum(mechanism, out, sign=1.0, motion=motion)
     lo, lo_at = _polish_stationary(mechanism, out, lo, lo_at, lo_branch)
     hi, hi_at = _polish_stationary(mechanism, out, hi, hi_at, hi_branch)
     nan = np.where(turns, np.nan, 0.0)
@@ -269,7 +270,9 @@ def _crank_rotation_between(t_a: Array, t_b: Array, through: Array) -> Array:
     return np.where(inside, ccw, TWO_PI - ccw)
 
 
-def coefficients(mechanism: Mechanism) -> dict[str, Array]:
+def coefficients(
+    mechanism: Mechanism, *, extremes: dict[str, Array] | None = None
+) -> dict[str, Array]:
     """Paper 003's kinematic coefficients, as exact maxima over the cycle.
 
     Crank-rocker (input turns, output rocks through Ψ, the crank turning φΨ between the output's
@@ -283,10 +286,12 @@ def coefficients(mechanism: Mechanism) -> dict[str, Array]:
     coefficients, which these generalise). Where the input cannot turn fully, all are NaN.
 
     Returns ``K_omega``, ``K_epsilon``, ``K_p``, ``delta`` and ``phi_psi``, ``psi`` (radians or
-    length), ``time_ratio`` (≥ 1, NaN for a double crank).
+    length), ``time_ratio`` (≥ 1, NaN for a double crank). ``extremes`` is
+    :func:`output_extremes` of the mechanism when the caller already has it.
     """
     arcs = input_range(mechanism)
-    ext = output_extremes(mechanism)
+    motion = circuit(mechanism, CIRCUIT_SAMPLES)
+    ext = output_extremes(mechanism, motion=motion) if extremes is None else extremes
 
     def rate1(m: Motion) -> Array:
         return output_rates(mechanism, m)[0]
@@ -299,11 +304,11 @@ def coefficients(mechanism: Mechanism) -> dict[str, Array]:
         return r1 * r2
 
     def absmax(q) -> Array:
-        return np.abs(circuit_extremum(mechanism, lambda m: np.abs(q(m)))[0])
+        return np.abs(circuit_extremum(mechanism, lambda m: np.abs(q(m)), motion=motion)[0])
 
     w_max, e_max, p_max = absmax(rate1), absmax(rate2), absmax(power)
-    w_hi = circuit_extremum(mechanism, rate1)[0]
-    w_lo = circuit_extremum(mechanism, rate1, sign=-1.0)[0]
+    w_hi = circuit_extremum(mechanism, rate1, motion=motion)[0]
+    w_lo = circuit_extremum(mechanism, rate1, sign=-1.0, motion=motion)[0]
     through = mechanism.frame_angle if isinstance(mechanism, FourBar) else mechanism.line_angle
     phi_psi = _crank_rotation_between(ext["min_at"], ext["max_at"], np.asarray(through))
     psi = ext["max"] - ext["min"]

@@ -9,7 +9,6 @@ assembly choice.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from typing import ClassVar
 
@@ -174,11 +173,3 @@ def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:
     return input_arcs(
         mechanism.plan, mechanism.params(), points=mechanism.point_fields, method=method
     )
-
-
-def constraint_residuals(mechanism: Mechanism, motion: Motion) -> Mapping[str, Array]:
-    """Each family's own closure equations evaluated on a motion, relative to its size.
-
-    Families override :meth:`Mechanism.residuals`; this is the free verb over it.
-    """
-    return mechanism.residuals(motion)  # type: ignore[attr-defined]
