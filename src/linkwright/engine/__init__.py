@@ -1,8 +1,8 @@
 """The engine: construction plans, batched evaluation with derivatives, limits and circuits."""
 
-from linkwright.engine.circuits import InputArcs, input_arcs, trace
+from linkwright.engine.circuits import InputArcs, input_arcs, input_turns, trace
 from linkwright.engine.evaluate import Motion, evaluate
-from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, Rigid
+from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, Rigid, Trammel
 
 __all__ = [
     "Crank",
@@ -13,7 +13,9 @@ __all__ = [
     "Motion",
     "Plan",
     "Rigid",
+    "Trammel",
     "evaluate",
     "input_arcs",
+    "input_turns",
     "trace",
 ]

@@ -27,7 +27,7 @@ from linkwright.engine.evaluate import Motion, batch_shape, evaluate, place_all
 from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan
 from linkwright.geometry import plane
 
-__all__ = ["InputArcs", "input_arcs", "trace"]
+__all__ = ["InputArcs", "input_arcs", "input_turns", "trace"]
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
@@ -40,9 +40,10 @@ class InputArcs:
     """The admissible inputs of a batch of linkages with their assembly held fixed.
 
     ``full`` marks linkages whose input turns fully, ``never`` those that assemble nowhere. Else
-    ``lo``/``hi`` (shape ``batch + (K,)``, NaN-padded, ``lo`` in (−π, π], ``hi > lo``) are the
-    arcs, and ``dyad_lo``/``dyad_hi`` the index (into ``plan.dyads``) of the dyad at its limit
-    there (−1 in padding).
+    ``lo``/``hi`` (shape ``batch + (K,)``, NaN-padded, ``lo`` in (−π, −π + period], ``hi > lo``)
+    are the arcs, and ``dyad_lo``/``dyad_hi`` the index (into ``plan.dyads``) of the dyad at its
+    limit there (−1 in padding). ``period`` is how far the input turns before the linkage
+    repeats: 2π, or 2πq for a linkage geared at a ratio p/q (see :func:`input_turns`).
     """
 
     full: NDArray[np.bool_]
@@ -51,6 +52,7 @@ class InputArcs:
     hi: Array
     dyad_lo: NDArray[np.int64]
     dyad_hi: NDArray[np.int64]
+    period: Array | float = TWO_PI
 
     @property
     def count(self) -> NDArray[np.int64]:
@@ -223,14 +225,17 @@ def _snap_inside(plan: Plan, params, points, lo: Array, hi: Array) -> tuple[Arra
     return theta[..., :k], theta[..., k:]
 
 
-def _normalised(full, never, lo, hi, dyad_lo, dyad_hi) -> InputArcs:
-    """Put each arc's start in (−π, π] and order arcs by start; padding last."""
+def _normalised(full, never, lo, hi, dyad_lo, dyad_hi, period=TWO_PI) -> InputArcs:
+    """Put each arc's start in (−π, −π + period] and order arcs by start; padding last."""
+    period = np.asarray(period, dtype=float)
+    t = period[..., None] if period.ndim else period
+    top = -np.pi + t
     # Starts already in range stay bit-for-bit; a shift rounds, and can land a start on −π or a
-    # hair above π (−π + 1 ulp goes to π + 1 ulp via (lo − π)/2π = −1): one more turn then.
-    inside = (lo > -np.pi) & (lo <= np.pi)
-    shift = np.where(inside, 0.0, TWO_PI * np.ceil((lo - np.pi) / TWO_PI))
+    # hair above the top (−π + 1 ulp goes to π + 1 ulp via (lo − π)/2π = −1): one more turn then.
+    inside = (lo > -np.pi) & (lo <= top)
+    shift = np.where(inside, 0.0, t * np.ceil((lo - top) / t))
     lo, hi = lo - shift, hi - shift
-    turn = np.where(lo > np.pi, TWO_PI, np.where(lo <= -np.pi, -TWO_PI, 0.0))
+    turn = np.where(lo > top, t, np.where(lo <= -np.pi, -t, 0.0))
     lo, hi = lo - turn, hi - turn
     order = np.argsort(np.where(np.isfinite(lo), lo, np.inf), axis=-1)
 
@@ -240,7 +245,13 @@ def _normalised(full, never, lo, hi, dyad_lo, dyad_hi) -> InputArcs:
     lo, hi = take(lo), take(hi)
     pad = ~np.isfinite(lo)
     return InputArcs(
-        full, never, lo, hi, np.where(pad, -1, take(dyad_lo)), np.where(pad, -1, take(dyad_hi))
+        full,
+        never,
+        lo,
+        hi,
+        np.where(pad, -1, take(dyad_lo)),
+        np.where(pad, -1, take(dyad_hi)),
+        period if period.ndim else float(period),
     )
 
 
@@ -258,30 +269,40 @@ def _assembled(plan, params, points, theta, branches) -> tuple[NDArray[np.bool_]
     return ok, np.stack(margins, axis=-1)
 
 
-def _numeric_arcs(plan, params, points, branches, grid: int = GRID) -> InputArcs:
-    """Arcs by bracketing the assembly predicate on a grid and bisecting every change."""
+def _numeric_arcs(plan, params, points, branches, grid: int = GRID, turns=None) -> InputArcs:
+    """Arcs by bracketing the assembly predicate on a grid and bisecting every change.
+
+    The grid covers one period of the input (``turns`` whole turns, ``grid`` nodes per turn).
+    """
     shape = batch_shape(params, points)
-    theta = np.linspace(-np.pi, np.pi, grid, endpoint=False)
+    turns = np.broadcast_to(np.ones(shape, int) if turns is None else turns, shape)
+    period = TWO_PI * turns
+    nodes = grid * int(turns.max()) if turns.size else grid
+    frac = np.arange(nodes) / nodes
+    theta = -np.pi + period[..., None] * frac
+    # The grid's closing node, exactly where the next period starts.
+    theta_next = np.concatenate((theta[..., 1:], (-np.pi + period)[..., None]), axis=-1)
     ok, _ = _assembled(plan, params, points, theta, branches)
-    ok = np.broadcast_to(ok, shape + (grid,))
+    ok = np.broadcast_to(ok, shape + (nodes,))
     nxt = np.roll(ok, -1, axis=-1)
     change = ok != nxt
     n_change = change.sum(axis=-1)
     kmax = int(n_change.max()) if n_change.size else 0
     full = ok.all(axis=-1)
     never = ~ok.any(axis=-1)
+    per = period if period.ndim else float(period)
     if kmax == 0:
         nanpad = np.full(shape + (1,), np.nan)
-        return InputArcs(
-            full, never, nanpad, nanpad.copy(), np.full(shape + (1,), -1), np.full(shape + (1,), -1)
-        )
+        neg = np.full(shape + (1,), -1)
+        return InputArcs(full, never, nanpad, nanpad.copy(), neg, neg.copy(), per)
     # Indices of the grid cells where the predicate changes, padded with the first one.
     idx = np.argsort(~change, axis=-1, kind="stable")[..., :kmax]
     has = np.arange(kmax) < n_change[..., None]
-    a = theta[idx]
-    # The next node itself, not a + 2π/grid: that can round past it, and a change confined to a
+    theta = np.broadcast_to(theta, shape + (nodes,))
+    a = np.take_along_axis(theta, idx, -1)
+    # The next node itself, not a + step: that can round past it, and a change confined to a
     # node (a joint passing exactly through a pivot) would fall outside its own bracket.
-    b = np.append(theta, np.pi)[idx + 1]
+    b = np.take_along_axis(np.broadcast_to(theta_next, shape + (nodes,)), idx, -1)
     entering = ~np.take_along_axis(ok, idx, -1)  # invalid → valid going up
     for _ in range(BISECTIONS):
         mid = 0.5 * (a + b)
@@ -301,22 +322,68 @@ def _numeric_arcs(plan, params, points, branches, grid: int = GRID) -> InputArcs
     k = lo.shape[-1]
     hi = np.full(lo.shape, np.nan)
     dyad_hi = np.full(lo.shape, -1)
+    t = period[..., None] if period.ndim else period
     for i in range(k):
-        gap = (hi_cand - lo[..., i : i + 1]) % TWO_PI
+        gap = (hi_cand - lo[..., i : i + 1]) % t
         gap = np.where(np.isfinite(gap), gap, np.inf)
         j = np.argmin(gap, axis=-1)
         end = np.take_along_axis(hi_cand, j[..., None], -1)[..., 0]
-        # The bisected end itself (unrounded by lo + gap), a turn up where it lies below lo.
-        end = np.where(end > lo[..., i], end, end + TWO_PI)
+        # The bisected end itself (unrounded by lo + gap), a period up where it lies below lo.
+        end = np.where(end > lo[..., i], end, end + period)
         hi[..., i] = np.where(np.isfinite(lo[..., i]), end, np.nan)
         dyad_hi[..., i] = np.take_along_axis(which, j[..., None], -1)[..., 0]
-    return _normalised(full, never, lo, hi, np.where(has & entering, which, -1), dyad_hi)
+    return _normalised(full, never, lo, hi, np.where(has & entering, which, -1), dyad_hi, per)
 
 
 def _expand(branches, shape):
     if not branches:
         return None
     return {k: np.broadcast_to(np.asarray(v)[..., :1], shape) for k, v in branches.items()}
+
+
+MAX_TURNS = 64
+RATIO_TOL = 1e-9
+
+
+def input_turns(plan: Plan, params: Mapping[str, ArrayLike], *, points=frozenset()) -> NDArray:
+    """How many turns of the input before every crank is back where it started.
+
+    A crank geared at the ratio k turns k times per input turn, so the linkage repeats after the
+    least q with k·q whole for every crank: q = 1 for integer ratios, 2 for 1.5 or −0.5, 3 for 2/3.
+
+    Raises
+    ------
+    ValueError
+        If some ratio is not a fraction with a denominator up to ``MAX_TURNS`` (to 1e-9): such
+        a linkage never repeats, and there is no closed circuit to trace.
+
+    Examples
+    --------
+    >>> from linkwright.engine import Crank, Fixed, Plan
+    >>> plan = Plan((Fixed("O", "O"), Crank("A", "O", 1.0, ratio="k")), traced=("A",))
+    >>> input_turns(plan, {"O": [0.0, 0.0], "k": [1.0, -1.5, 2 / 3]}, points=frozenset({"O"}))
+    array([1, 2, 3])
+    """
+    shape = batch_shape(params, points)
+    ratios = []
+    for step in plan.steps:
+        if isinstance(step, Crank):
+            r = params[step.ratio] if isinstance(step.ratio, str) else step.ratio
+            ratios.append(np.broadcast_to(np.asarray(r, dtype=float), shape))
+    turns = np.zeros(shape, dtype=np.int64)
+    for q in range(1, MAX_TURNS + 1):
+        whole = np.ones(shape, dtype=bool)
+        for r in ratios:
+            x = r * q
+            whole &= np.abs(x - np.round(x)) <= RATIO_TOL * np.maximum(1.0, np.abs(x))
+        turns = np.where((turns == 0) & whole, q, turns)
+        if np.all(turns > 0):
+            return turns
+    bad = [float(np.asarray(r)[turns == 0].ravel()[0]) for r in ratios if np.any(turns == 0)]
+    raise ValueError(
+        f"gear ratio {bad[0]:g} is not a fraction p/q with q ≤ {MAX_TURNS}: the linkage never "
+        "repeats, so it has no closed circuit (give a rational ratio, e.g. 3/2)"
+    )
 
 
 def input_arcs(
@@ -330,20 +397,39 @@ def input_arcs(
 
     ``method`` is ``"analytic"`` (single dyad with a first-order trigonometric closure),
     ``"numeric"`` (grid bracketing and bisection, any plan) or ``"auto"`` (analytic where it
-    applies). Tests compare the two.
+    applies). Tests compare the two. The arcs cover one period of the input
+    (:func:`input_turns`): several turns for a linkage geared at a fractional ratio.
     """
     dyads = plan.dyads
+    turns = input_turns(plan, params, points=points)
     if not dyads:
         shape = batch_shape(params, points)
         nanpad = np.full(shape + (1,), np.nan)
         neg = np.full(shape + (1,), -1)
-        return InputArcs(np.ones(shape, bool), np.zeros(shape, bool), nanpad, nanpad, neg, neg)
-    analytic_ok = len(dyads) == 1 and all(_turns_with_input(plan, p) for p in dyads[0].parents)
+        period = TWO_PI * turns
+        return InputArcs(
+            np.ones(shape, bool),
+            np.zeros(shape, bool),
+            nanpad,
+            nanpad,
+            neg,
+            neg,
+            period if period.ndim else float(period),
+        )
+    analytic_ok = (
+        len(dyads) == 1
+        and all(_turns_with_input(plan, p) for p in dyads[0].parents)
+        and np.all(turns == 1)
+    )
     if method == "analytic" and not analytic_ok:
         raise ValueError("this plan's limits have no closed form; use method='numeric'")
     if method == "analytic" or (method == "auto" and analytic_ok):
         return _analytic_arcs(plan, params, points)
-    return _numeric_arcs(plan, params, points, None)
+    return _numeric_arcs(plan, params, points, None, turns=turns)
+
+
+MAX_SEGMENTS = 32
+SCAN_CHUNK = 240
 
 
 def trace(
@@ -358,46 +444,220 @@ def trace(
 ) -> Motion:
     """Sample the whole circuit of every linkage in the batch with ``samples`` inputs.
 
-    A linkage whose input turns fully is sampled at ``start + 2πk/samples`` on its own assembly.
-    Otherwise its ``circuit``-th input arc (arcs ordered by their start in (−π, π]) is swept up on
-    the document's assembly and back down on the other branch of the dyad that limits it, so
-    sample 0 is the lower limit and sample ``ceil(samples/2)`` the upper one, both exact. A
-    linkage with no such arc comes back with ``valid`` all False.
-
-    Only plans whose circuits are limited by a single dyad are traced here; plans with several
-    dyads need the general walker (issue 3).
+    The circuit is what the machine does when it runs. It starts on the document's assembly,
+    at ``start`` where the input turns fully (one period: :func:`input_turns`), else at the lower
+    end of the ``circuit``-th input arc (arcs ordered by their start). The input then runs up;
+    each time a dyad reaches its limit position the input reverses and that dyad changes
+    branch (its two branches meet there, so nothing jumps), until the linkage is back where it
+    started. A single-dyad linkage sweeps its arc up and back; a six-bar may pass several limits
+    of different dyads. Each stretch between two limits gets samples in proportion to its
+    length and starts with its limit, exactly. A linkage with no such arc comes back with
+    ``valid`` all False.
     """
-    if len(plan.dyads) > 1:
-        raise NotImplementedError("circuit tracing of plans with several dyads is not built yet")
     if samples < 2:
         raise ValueError("a circuit needs at least 2 samples")
     arcs = input_arcs(plan, params, points=points)
     shape = arcs.full.shape
-    k = np.arange(samples)
-    full_theta = start + TWO_PI * k / samples
+    period = np.broadcast_to(np.asarray(arcs.period, dtype=float), shape)
     idx = np.clip(circuit, 0, arcs.lo.shape[-1] - 1)
     lo = arcs.lo[..., idx]
     hi = arcs.hi[..., idx]
     have_arc = np.isfinite(lo) & (circuit < arcs.lo.shape[-1])
-    n_up = (samples + 1) // 2
-    n_down = samples - n_up
-    w = np.concatenate((np.arange(n_up) / n_up, 1.0 - np.arange(n_down) / max(n_down, 1)))
-    down = np.concatenate((np.zeros(n_up, bool), np.ones(n_down, bool)))
-    arc_theta = lo[..., None] * (1.0 - w) + hi[..., None] * w
-    theta = np.where(
-        arcs.full[..., None], full_theta, np.where(have_arc[..., None], arc_theta, 0.0)
-    )
-    branches = None
-    if plan.dyads:
-        dyad = plan.dyads[0]
-        base = np.broadcast_to(np.asarray(params[dyad.branch], dtype=float), shape)[..., None]
-        flip = np.where(arcs.full[..., None], False, down)
-        branches = {dyad.name: np.where(flip, -base, base)}
-    motion = evaluate(plan, params, theta, points=points, branches=branches, order=order)
-    usable = (arcs.full | have_arc)[..., None]
-    if usable.all():
+    usable = arcs.full | have_arc
+    dyads = plan.dyads
+    doc = {
+        d.name: np.broadcast_to(np.asarray(params[d.branch], dtype=float), shape).copy()
+        for d in dyads
+    }
+    if len(dyads) <= 1:
+        seg_start = np.stack((np.where(arcs.full, start, lo), np.where(arcs.full, np.nan, hi)), -1)
+        seg_end = np.stack((np.where(arcs.full, start + period, hi), lo), -1)
+        seg_end[..., 1] = np.where(arcs.full, np.nan, seg_end[..., 1])
+        seg_branches = {k: np.stack((v, -v), -1) for k, v in doc.items()}
+        weight = None
+    else:
+        theta0 = np.where(arcs.full, start, np.where(have_arc, lo, 0.0))
+        seg_start, seg_end, seg_branches = _walk(plan, params, points, theta0, doc, period, usable)
+        weight = _path_lengths(plan, params, points, seg_start, seg_end, seg_branches)
+    seg_start = np.where(usable[..., None], seg_start, np.nan)
+    # A circuit between limits has at least two segments (up, then back); a full turn has one.
+    limited = np.isfinite(seg_start[..., 1]) if seg_start.shape[-1] > 1 else np.zeros(shape, bool)
+    theta, segment = _sample_segments(seg_start, seg_end, samples, limited, weight)
+    branches = {
+        k: np.take_along_axis(np.nan_to_num(v, nan=1.0), segment, -1)
+        for k, v in seg_branches.items()
+    }
+    motion = evaluate(plan, params, theta, points=points, branches=branches or None, order=order)
+    keep = np.isfinite(theta)
+    if keep.all():
         return motion
-    return _restrict(motion, usable)
+    return _restrict(motion, keep)
+
+
+def _sample_segments(
+    seg_start: Array,
+    seg_end: Array,
+    samples: int,
+    limited: NDArray[np.bool_],
+    weight: Array | None = None,
+) -> tuple[Array, NDArray]:
+    """Spread ``samples`` inputs over each linkage's segments, in proportion to their lengths.
+
+    Every segment gets its start (a limit position) as a sample, and the rest are shared by
+    largest remainder, ties to the earlier segment, so a sweep up and back down an arc puts
+    ``ceil(samples/2)`` samples on the way up. ``limited`` marks linkages whose segments run
+    between limit positions; ``weight`` (default: the input's travel) is what the samples are
+    shared in proportion to. Linkages without segments get NaN inputs.
+    """
+    length = np.abs(seg_end - seg_start) if weight is None else weight
+    length = np.where(np.isfinite(length), length, 0.0)
+    # An arc shrunk to a point (a linkage just touching its limit) still has its segments, all
+    # at that one position: share the samples between them as if they were equal.
+    point = (length.sum(-1, keepdims=True) == 0) & np.isfinite(seg_start)
+    length = np.where(point, 1.0, length)
+    total = length.sum(-1, keepdims=True)
+    # Every segment first gets its start, however short: a segment without a sample would drop
+    # the branch change it carries, and the curve would jump across it.
+    real = length > 0
+    base = real.astype(np.int64)
+    base = np.where(base.sum(-1, keepdims=True) <= samples, base, 0)
+    spare = samples - base.sum(-1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(total > 0, spare * length / total, 0.0)
+    count = np.floor(share).astype(np.int64)
+    left = spare - count.sum(-1, keepdims=True)
+    frac = share - count
+    s = seg_start.shape[-1]
+    # Rank segments by remainder (descending), the earlier first among equals.
+    rank = np.argsort(np.argsort(-frac, axis=-1, kind="stable"), axis=-1, kind="stable")
+    count = base + count + ((rank < left) & real)
+    bounds = np.cumsum(count, -1)
+    k = np.arange(samples)
+    seg = np.minimum(np.sum(k[..., None] >= bounds[..., None, :], axis=-1), s - 1)
+    first = np.take_along_axis(bounds - count, seg, -1)
+    n = np.take_along_axis(count, seg, -1)
+    a = np.take_along_axis(seg_start, seg, -1)
+    b = np.take_along_axis(seg_end, seg, -1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        frac = (k - first) / n
+        # Between two limit positions the joints move like the square root of the distance to
+        # the nearer limit, so even steps of the input would crowd the middle of the curve and
+        # leave long chords at its ends. sin²(πf/2) spaces the input quadratically at both ends,
+        # which makes the steps along the curve even there. A full turn has no limits: even steps.
+        frac = np.where(limited[..., None], np.sin(0.5 * np.pi * frac) ** 2, frac)
+    theta = a + (b - a) * frac
+    theta = np.where(total > 0, theta, np.nan)
+    return theta, seg
+
+
+PILOT = 17
+
+
+def _path_lengths(plan, params, points, seg_start, seg_end, seg_branches) -> Array:
+    """How far the joints travel along each segment, from a few samples of each.
+
+    A segment short in the input can be long on the curve (two limits close together, with the
+    joints swinging fast between them): sharing samples by the input's travel would draw it as
+    one chord. NaN segments weigh 0; a segment of zero travel keeps a tiny weight so that it
+    still gets its start.
+    """
+    f = np.sin(0.5 * np.pi * np.linspace(0.0, 1.0, PILOT)) ** 2
+    a, b = seg_start[..., None], seg_end[..., None]
+    theta = np.where(np.isfinite(a), a + (b - a) * f, 0.0)
+    shape = seg_start.shape
+    flat = theta.reshape(shape[:-1] + (-1,))
+    branches = {
+        k: np.repeat(np.nan_to_num(v, nan=1.0), PILOT, axis=-1) for k, v in seg_branches.items()
+    }
+    motion = evaluate(plan, params, flat, points=points, branches=branches, order=0)
+    travel = np.zeros(shape)
+    for pos in motion.positions.values():
+        p = pos.reshape(shape + (PILOT, 2))
+        step = np.linalg.norm(np.diff(p, axis=-2), axis=-1)
+        travel += np.nansum(step, axis=-1)
+    travel = np.where(np.isfinite(seg_start), travel, 0.0)
+    tiny = 1e-12 * np.maximum(travel.sum(-1, keepdims=True), 1e-300)
+    return np.where(np.isfinite(seg_start), np.maximum(travel, tiny), 0.0)
+
+
+def _walk(plan, params, points, theta0, doc, period, usable):
+    """Follow each linkage from ``theta0`` on its document branches until it closes.
+
+    Returns the segments' starts, ends and per-dyad branches, shape ``batch + (S,)``, NaN-padded.
+    """
+    dyads = plan.dyads
+    theta = theta0.astype(float).copy()
+    direction = np.ones(theta.shape)
+    branches = {k: v.copy() for k, v in doc.items()}
+    active = usable.copy()
+    starts, ends, snaps = [], [], []
+    for _ in range(MAX_SEGMENTS):
+        if not active.any():
+            break
+        end, which, hit = _next_limit(plan, params, points, theta, direction, branches, period)
+        seg_end = np.where(hit, end, theta + direction * period)
+        starts.append(np.where(active, theta, np.nan))
+        ends.append(np.where(active, seg_end, np.nan))
+        snaps.append({k: v.copy() for k, v in branches.items()})
+        flip = active & hit
+        for i, d in enumerate(dyads):
+            branches[d.name] = np.where(flip & (which == i), -branches[d.name], branches[d.name])
+        direction = np.where(flip, -direction, direction)
+        theta = np.where(active, seg_end, theta)
+        gap = np.abs(np.remainder(theta - theta0 + 0.5 * period, period) - 0.5 * period)
+        home = (gap <= 1e-9 * period) & (direction > 0)
+        for k in branches:
+            home &= branches[k] == doc[k]
+        active = active & hit & ~home
+    # A walk that does not close within MAX_SEGMENTS is not a circuit we can vouch for.
+    failed = active
+    seg_start = np.stack(starts, -1)
+    seg_end = np.stack(ends, -1)
+    seg_start = np.where(failed[..., None], np.nan, seg_start)
+    seg_branches = {k: np.stack([s[k] for s in snaps], -1) for k in doc}
+    return seg_start, seg_end, seg_branches
+
+
+def _next_limit(plan, params, points, theta, direction, branches, period):
+    """The first limit position met going from ``theta`` in ``direction``, within one period.
+
+    Scans the assembly predicate on the branches given in steps of one grid cell, then bisects
+    the first failing cell to the last bit. Returns the limit (the assembled end), the index of
+    the dyad at its limit there, and whether a limit was met at all.
+    """
+    shape = theta.shape
+    turns = np.rint(period / TWO_PI)
+    nodes = GRID * int(turns.max()) if turns.size else GRID
+    step = direction * period / nodes
+    br = {k: v[..., None] for k, v in branches.items()}
+    found = np.zeros(shape, dtype=bool)
+    a = np.full(shape, np.nan)
+    b = np.full(shape, np.nan)
+    for c0 in range(1, nodes + 1, SCAN_CHUNK):
+        j = np.arange(c0, min(c0 + SCAN_CHUNK, nodes + 1))
+        th = theta[..., None] + step[..., None] * j
+        ok, _ = _assembled(plan, params, points, th, br)
+        ok = np.broadcast_to(ok, th.shape)
+        bad = ~ok
+        first = np.argmax(bad, axis=-1)
+        new = bad.any(-1) & ~found
+        b = np.where(new, np.take_along_axis(th, first[..., None], -1)[..., 0], b)
+        prev = theta + step * (c0 + first - 1)
+        a = np.where(new, prev, a)
+        found |= new
+        if found.all():
+            break
+    a = np.where(found, a, theta)
+    b = np.where(found, b, theta)
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (a + b)
+        ok, _ = _assembled(plan, params, points, mid[..., None], br)
+        ok = np.broadcast_to(ok, mid.shape + (1,))[..., 0]
+        a = np.where(ok, mid, a)
+        b = np.where(ok, b, mid)
+    _, margins = _assembled(plan, params, points, a[..., None], br)
+    which = np.argmin(margins[..., 0, :], axis=-1)
+    return a, np.broadcast_to(which, shape), found
 
 
 def _restrict(motion: Motion, keep: NDArray[np.bool_]) -> Motion:

@@ -33,6 +33,7 @@ __all__ = [
     "Plan",
     "Rigid",
     "Step",
+    "Trammel",
 ]
 
 Array = NDArray[np.float64]
@@ -298,6 +299,60 @@ class Rigid:
         regular = regular & valid
         vel, acc = _mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular)
+
+
+@dataclass(frozen=True)
+class Trammel:
+    """A slider on one guide whose rigid arm, turned by the input, ends on a second guide.
+
+    The joint X runs on the line through ``guide1`` at ``angle1``; the arm from X has length
+    ``arm`` and the absolute angle ``phase + θ``, and its far end runs on the line through
+    ``guide2`` at ``angle2``. This is the double slider (elliptic trammel) of Kiper et al. driven
+    by its coupler angle (paper 004, eqs. 1–2): with w the arm vector, X = G1 + t·e1 and
+    (X + w − G2)·n2 = 0 give t = (G2 − G1 − w)·n2 / (e1·n2), linear in w, so positions and both
+    derivatives are closed forms. It assembles at every input unless the guides are parallel.
+    """
+
+    name: str
+    guide1: str
+    angle1: Param
+    guide2: str
+    angle2: Param
+    arm: Param
+    phase: Param = 0.0
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.guide1, self.guide2)
+
+    def place(self, ctx: Context) -> JointState:
+        g1, g2 = ctx.joint(self.guide1), ctx.joint(self.guide2)
+        e1 = _direction(ctx.scalar(self.angle1))
+        n2 = plane.perp(_direction(ctx.scalar(self.angle2)))
+        arm = ctx.scalar(self.arm)
+        phi = ctx.scalar(self.phase) + ctx.theta
+        w = arm[..., None] * np.stack((np.cos(phi), np.sin(phi)), axis=-1)
+        den = plane.dot(e1, n2)  # sin of the angle between the guides
+        parallel = np.abs(den) <= SINGULAR_SIN
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = np.where(parallel, np.nan, 1.0 / den)
+
+        def along(g1v: Array, g2v: Array, wv: Array) -> Array:
+            return g1v + (plane.dot(g2v - g1v - wv, n2) * inv)[..., None] * e1
+
+        valid, regular = _combine(g1, g2)
+        valid = valid & ~np.broadcast_to(parallel, valid.shape)
+        pos = np.where(valid[..., None], along(g1.pos, g2.pos, w), np.nan)
+        regular = regular & valid
+        # dw/dθ = perp(w) and d²w/dθ² = −w: the arm turns one-for-one with the input.
+        vel = along(g1.vel, g2.vel, plane.perp(w)) if ctx.order >= 1 else None
+        acc = along(g1.acc, g2.acc, -w) if ctx.order >= 2 else None
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular)
+
+
+def _direction(angle: Array) -> Array:
+    return np.stack(np.broadcast_arrays(np.cos(angle), np.sin(angle)), axis=-1)
 
 
 def _mask_derivatives(

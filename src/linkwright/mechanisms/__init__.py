@@ -8,13 +8,17 @@ from linkwright.mechanisms.base import (
     input_range,
     solve,
 )
-from linkwright.mechanisms.planar import FourBar, SliderCrank
+from linkwright.mechanisms.planar import DoubleSlider, FourBar, GearedFiveBar, SliderCrank
 
-FAMILIES: dict[str, type[Mechanism]] = {cls.family: cls for cls in (FourBar, SliderCrank)}
+FAMILIES: dict[str, type[Mechanism]] = {
+    cls.family: cls for cls in (FourBar, SliderCrank, GearedFiveBar, DoubleSlider)
+}
 
 __all__ = [
     "FAMILIES",
+    "DoubleSlider",
     "FourBar",
+    "GearedFiveBar",
     "InvalidMechanism",
     "Mechanism",
     "SliderCrank",

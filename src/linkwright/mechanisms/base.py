@@ -142,9 +142,12 @@ def circuit(
 ) -> Motion:
     """The whole closed circuit, as the machine runs, sampled at ``samples`` inputs.
 
-    Where the input turns fully this is one turn on the mechanism's assembly. Where it cannot,
-    the input sweeps its arc up and back down, the dyad changing branch at each limit position
-    (both limits are samples, exactly).
+    Where the input turns fully this is one turn on the mechanism's assembly (several for a
+    linkage geared at a fractional ratio). Where it cannot, the input sweeps its arc up and back
+    down, the dyad at its limit changing branch at each limit position (both limits are
+    samples, exactly); a linkage of several dyads may pass limits of different dyads before it
+    closes. Between limits the input is spaced as sin², so that the joints, which move like the
+    square root of the distance to a limit, advance in even steps along their curves.
 
     Examples
     --------
@@ -154,7 +157,8 @@ def circuit(
     >>> rocker_input = FourBar(A0=[0, 0], B0=[1, 0], crank=3.5, coupler=5, rocker=1)
     >>> m = circuit(rocker_input, 8)
     >>> np.degrees(m.input).round(3)
-    array([113.132, 146.566, 180.   , 213.434, 246.868, 213.434, 180.   , 146.566])
+    array([113.132, 132.717, 180.   , 227.283, 246.868, 227.283, 180.   ,
+           132.717])
     >>> m.branches["B"]
     array([ 1.,  1.,  1.,  1., -1., -1., -1., -1.])
     """

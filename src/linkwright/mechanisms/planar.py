@@ -1,6 +1,8 @@
-"""Planar named families: the four-bar and the slider-crank.
+"""Planar named families: four-bar, slider-crank, geared five-bar and double slider.
 
-Joint letters follow the foundation contract (paper 003's roles: crank, coupler, output, frame).
+Joint letters follow paper 003's roles for the four-bar and slider-crank, paper 002's for the
+geared five-bar (its two cranks A0A and B0B, the links AC and BC) and paper 004's for the double
+slider (M, R, Q, P).
 """
 
 from __future__ import annotations
@@ -11,11 +13,11 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine import Crank, DyadRRP, DyadRRR, Fixed, Motion, Plan, Rigid
+from linkwright.engine import Crank, DyadRRP, DyadRRR, Fixed, Motion, Plan, Rigid, Trammel
 from linkwright.geometry import plane
-from linkwright.mechanisms.base import Mechanism
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism
 
-__all__ = ["FourBar", "SliderCrank"]
+__all__ = ["DoubleSlider", "FourBar", "GearedFiveBar", "SliderCrank"]
 
 Array = NDArray[np.float64]
 
@@ -149,4 +151,180 @@ class SliderCrank(Mechanism):
             "rod": _link_error(motion, "A", "B", self.rod) / s,
             "line": on_line / s,
             "point": _frame_error(motion, "A", "B", "P", self.u, self.v) / s,
+        }
+
+
+@dataclass(frozen=True)
+class GearedFiveBar(Mechanism):
+    """Geared five-bar (paper 002): cranks A0A and B0B geared together, links AC and BC.
+
+    Input θ1 is the angle of A − A0 from +x; the second crank turns with it through gears,
+    θ2 = phase2 + ratio·(θ1 − phase1) being the angle of B − B0 (paper 002 uses ratio −1: equal
+    speeds, opposite senses). C closes the dyad A–C–B; P sits at (u, v) in the frame with origin
+    A and x-axis along A→C (paper 002's traced point 6 lies on the line AC, beyond C). The
+    ``assembly`` is the sign of (B − A) × (C − A). Joints: A0, B0, A, B, C, P.
+
+    Where |AB| leaves [|link1 − link2|, link1 + link2] the dyad cannot close: those are the
+    locking positions of paper 002, where its tool stops and lets the linkage oscillate. A
+    fractional ratio p/q repeats only after q input turns (:func:`linkwright.engine.input_turns`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from linkwright.mechanisms import solve
+    >>> m = GearedFiveBar(A0=[0, 0], B0=[4, 0], crank1=1, crank2=1, link1=3, link2=3,
+    ...                   ratio=-1)
+    >>> motion = solve(m, [np.pi / 2])
+    >>> motion.positions["B"].round(12) + 0.0, motion.positions["C"].round(6)
+    (array([[ 4., -1.]]), array([[2.894427, 1.788854]]))
+
+    At θ1 = 90°, A = (0, 1) and θ2 = −90° puts B at (4, −1); C is 3 from both, on the left of
+    A→B: the midpoint (2, 0) plus √(9 − 5) = 2 along the unit normal (2, 4)/√20.
+    """
+
+    A0: ArrayLike
+    B0: ArrayLike
+    crank1: ArrayLike
+    crank2: ArrayLike
+    link1: ArrayLike
+    link2: ArrayLike
+    phase1: ArrayLike = 0.0
+    phase2: ArrayLike = 0.0
+    ratio: ArrayLike = -1.0
+    u: ArrayLike = 0.0
+    v: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+
+    family: ClassVar[str] = "geared-fivebar"
+    point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0"})
+    length_fields: ClassVar[tuple[str, ...]] = ("crank1", "crank2", "link1", "link2")
+    reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "A", "B", "C", "P")
+    plan: ClassVar[Plan] = Plan(
+        (
+            Fixed("A0", "A0"),
+            Fixed("B0", "B0"),
+            Crank("A", "A0", "crank1"),
+            Crank("B", "B0", "crank2", ratio="ratio", phase="gear_phase"),
+            DyadRRR("C", "A", "link1", "B", "link2", branch="assembly"),
+            Rigid("P", "A", "C", "u", "v"),
+        ),
+        traced=("P", "C"),
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if np.any(self.ratio == 0):
+            raise InvalidMechanism(
+                "ratio: must not be 0 (the second crank would not turn: that is a four-bar)"
+            )
+
+    def params(self) -> dict[str, Array]:
+        p = super().params()
+        # θ2 = phase2 + ratio·(θ1 − phase1) as the crank step's phase + ratio·θ1.
+        p["gear_phase"] = p["phase2"] - p["ratio"] * p["phase1"]
+        return p
+
+    def crank2_angle(self, theta1: ArrayLike) -> Array:
+        """θ2, the angle of B − B0, at the input θ1 (radians)."""
+        return self.phase2 + self.ratio * (np.asarray(theta1) - self.phase1)
+
+    def residuals(self, motion: Motion) -> dict[str, Array]:
+        s = np.asarray(self.scale)[..., None]
+        b = motion.positions["B"] - motion.positions["B0"]
+        theta2 = self.crank2_angle(motion.input)
+        gear = plane.cross(plane.unit_direction(theta2), b)  # B − B0 off its geared direction
+        return {
+            "crank1": _link_error(motion, "A0", "A", self.crank1) / s,
+            "crank2": _link_error(motion, "B0", "B", self.crank2) / s,
+            "gear": gear / s,
+            "link1": _link_error(motion, "A", "C", self.link1) / s,
+            "link2": _link_error(motion, "B", "C", self.link2) / s,
+            "point": _frame_error(motion, "A", "C", "P", self.u, self.v) / s,
+        }
+
+
+@dataclass(frozen=True)
+class DoubleSlider(Mechanism):
+    """Double slider (elliptic trammel) of paper 004, driven by its coupler angle θ.
+
+    Slider R runs on the line through M = (X0, Y0) at angle α + β, slider Q on the line through
+    M at angle β (radians). The coupler carries R, Q and P: with θ the input (paper 004, eq. 1),
+    Q = R − (p + q)·e^{iθ} and P = R − (p + i·h)·e^{iθ}, and the loop closes with
+    R = M + t·e^{i(α+β)}, t = (p + q)·sin(θ − β)/sin α (eq. 2). p, q and h are signed; P traces
+    an ellipse (eq. 3; :func:`linkwright.analysis.ellipse`). Joints: M, R, Q, P.
+
+    Examples
+    --------
+    Archimedes' trammel (α = 90°, h = 0): P traces the ellipse with semi-axes p and q.
+
+    >>> import numpy as np
+    >>> from linkwright.mechanisms import solve
+    >>> m = DoubleSlider(M=[0, 0], alpha=np.pi / 2, beta=0.0, p=3, q=1)
+    >>> solve(m, [0.0, np.pi / 2]).positions["P"].round(12) + 0.0
+    array([[-3.,  0.],
+           [ 0.,  1.]])
+    """
+
+    M: ArrayLike
+    alpha: ArrayLike
+    beta: ArrayLike
+    p: ArrayLike
+    q: ArrayLike
+    h: ArrayLike = 0.0
+
+    family: ClassVar[str] = "doubleslider"
+    point_fields: ClassVar[frozenset[str]] = frozenset({"M"})
+    reported_joints: ClassVar[tuple[str, ...]] = ("M", "R", "Q", "P")
+    plan: ClassVar[Plan] = Plan(
+        (
+            Fixed("M", "M"),
+            Trammel("R", "M", "angle_R", "M", "beta", "pq", phase=np.pi),
+            Crank("Q", "R", "pq", phase=np.pi),
+            Crank("P", "R", "arm_P", phase="phase_P"),
+        ),
+        traced=("P",),
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if np.any(np.abs(np.sin(self.alpha)) <= 1e-12):
+            raise InvalidMechanism(
+                "alpha: must not be a multiple of 180° (the slider lines would be parallel)"
+            )
+        if np.any(self.p + self.q == 0):
+            raise InvalidMechanism("p, q: p + q must not be 0 (the sliders R and Q would coincide)")
+
+    def params(self) -> dict[str, Array]:
+        p = super().params()
+        p["angle_R"] = p["alpha"] + p["beta"]
+        p["pq"] = p["p"] + p["q"]
+        # P − R = −(p + i·h)·e^{iθ} = |p + ih|·e^{i(θ + π + atan2(h, p))}.
+        p["arm_P"] = np.hypot(p["p"], p["h"])
+        p["phase_P"] = np.pi + np.arctan2(p["h"], p["p"])
+        return p
+
+    @property
+    def scale(self) -> Array:
+        sizes = np.broadcast_arrays(*(np.abs(np.asarray(x)) for x in (self.p, self.q, self.h)))
+        return np.maximum(np.maximum.reduce(sizes), np.abs(self.p + self.q))
+
+    def slider_travel(self, theta: ArrayLike) -> Array:
+        """t = |MR| signed along e^{i(α+β)} at the input θ (paper 004, eq. 2)."""
+        return (self.p + self.q) * np.sin(np.asarray(theta) - self.beta) / np.sin(self.alpha)
+
+    def residuals(self, motion: Motion) -> dict[str, Array]:
+        s = np.asarray(self.scale)[..., None]
+        m = np.asarray(self.M)[..., None, :]
+        R, Q, P = (motion.positions[k] for k in "RQP")
+        e_r = plane.unit_direction(np.asarray(self.alpha + self.beta))[..., None, :]
+        e_q = plane.unit_direction(np.asarray(self.beta))[..., None, :]
+        turn = plane.unit_direction(motion.input)
+        pq = np.asarray(self.p + self.q)[..., None]
+        want_p = R - np.asarray(self.p)[..., None, None] * turn
+        want_p = want_p - np.asarray(self.h)[..., None, None] * plane.perp(turn)
+        return {
+            "R on its line": plane.cross(e_r, R - m) / s,
+            "Q on its line": plane.cross(e_q, Q - m) / s,
+            "RQ": plane.norm(Q - R + pq[..., None] * turn) / s,
+            "point": plane.norm(P - want_p) / s,
         }
