@@ -10,6 +10,14 @@ from typing import Any
 
 import numpy as np
 
+from linkwright.analysis.conic import (
+    conic_invariants,
+    conic_kind,
+    doubleslider_conic,
+    ellipse_axes,
+    normalise_conic,
+)
+from linkwright.analysis.general import dyad_transmission_angles, general_report, point_speed
 from linkwright.analysis.planar import (
     coefficients,
     fourbar_class,
@@ -22,17 +30,25 @@ from linkwright.analysis.planar import (
     transmission_angle,
     transmission_extremes,
 )
-from linkwright.mechanisms import FourBar, SliderCrank, input_range
+from linkwright.mechanisms import DoubleSlider, FourBar, GearedFiveBar, SliderCrank, input_range
 from linkwright.mechanisms.base import Mechanism
 
 __all__ = [
     "analyze",
     "coefficients",
+    "conic_invariants",
+    "conic_kind",
+    "doubleslider_conic",
+    "dyad_transmission_angles",
+    "ellipse_axes",
     "fourbar_class",
+    "general_report",
     "grashof",
+    "normalise_conic",
     "output_angle",
     "output_extremes",
     "output_rates",
+    "point_speed",
     "slidercrank_class",
     "stroke",
     "transmission_angle",
@@ -59,7 +75,13 @@ def _wrap_deg(x: Any) -> float | None:
 
 
 def analyze(mechanism: Mechanism) -> dict[str, Any]:
-    """The full kinematic report of one planar four-bar or slider-crank, in degrees.
+    """The full kinematic report of one mechanism, in degrees (JSON-ready).
+
+    Four-bars and slider-cranks get paper 003's report below. Every other family gets
+    :func:`general_report` (limit positions, each dyad's transmission angle, the traced points'
+    speed), plus for a geared five-bar its ``locking`` (paper 002: whether and between which
+    inputs it oscillates) and for a double slider its ``ellipse`` (paper 004: centre, semi-axes,
+    orientation and the normalised conic A..F of eq. 3).
 
     Angles of the input (φ1) and output (φ3) are measured from the frame line A0→B0 as in paper
     003 (for a slider-crank: from the slider's line direction), counter-clockwise.
@@ -103,7 +125,7 @@ def analyze(mechanism: Mechanism) -> dict[str, Any]:
         cls = str(slidercrank_class(mechanism))
         link_words = "the rod cannot reach the slider's line"
     else:
-        raise TypeError(f"no planar analysis for family {mechanism.family!r}")
+        return _report_other(mechanism)
     report: dict[str, Any] = {
         "family": mechanism.family,
         "class": cls,
@@ -160,4 +182,33 @@ def analyze(mechanism: Mechanism) -> dict[str, Any]:
     co = coefficients(mechanism, extremes=ext)
     report["time_ratio"] = _num(co["time_ratio"])
     report["coefficients"] = {k: _num(co[k]) for k in ("K_omega", "K_epsilon", "K_p", "delta")}
+    return report
+
+
+def _report_other(mechanism: Mechanism) -> dict[str, Any]:
+    report = general_report(mechanism)
+    if isinstance(mechanism, GearedFiveBar):
+        turns = report["period_turns"]
+        report["locking"] = {
+            "oscillates": report["assembles"] and not report["input_turns_fully"],
+            "locking_positions_deg": [p["input_deg"] for p in report["limit_positions"]],
+            "note": (
+                "the dyad A–C–B cannot close beyond the locking positions; the linkage "
+                "oscillates between them, as paper 002's tool does"
+                if report["assembles"] and not report["input_turns_fully"]
+                else None
+            ),
+            "repeats_after_turns": turns,
+        }
+    if isinstance(mechanism, DoubleSlider):
+        coeffs = doubleslider_conic(mechanism)
+        axes = ellipse_axes(coeffs)
+        report["ellipse"] = {
+            "center": [_num(c) for c in axes["center"]],
+            "semi_major": _num(axes["semi_major"]),
+            "semi_minor": _num(axes["semi_minor"]),
+            "orientation_deg": _deg(axes["orientation"]),
+            "conic": dict(zip("ABCDEF", (_num(c) for c in coeffs), strict=True)),
+            "kind": str(conic_kind(coeffs)),
+        }
     return report

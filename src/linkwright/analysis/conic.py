@@ -1,0 +1,178 @@
+"""Conics: the ellipse a double slider traces, its coefficients, invariants and axes.
+
+A conic is the six coefficients (A, B, C, D, E, F) of A·X² + B·XY + C·Y² + D·X + E·Y + F = 0,
+stacked on a last axis of length 6. Its invariants are δ = B² − 4AC and
+Δ = det [[A, B/2, D/2], [B/2, C, E/2], [D/2, E/2, F]] (paper 004, eqs. 4–5).
+
+Kiper et al. (paper 004) write the double slider's ellipse in closed form (eq. 3) and scale any
+ellipse's coefficients by k = −16Δ/δ² (eq. 10), after which δ² = −16Δ (eq. 9) and
+A + C = a² + b², √(B² + (A − C)²) = a² − b² (eq. 11). The coefficients of eq. 3 already satisfy
+eq. 9 for every double slider, not only the α = 90°, h = 0 trammel (SEED-NOTES): with
+K = h² + cot α·(p + q)·h − p·q, δ = −4K² and Δ = −K⁴.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "conic_invariants",
+    "conic_kind",
+    "doubleslider_conic",
+    "ellipse_axes",
+    "normalise_conic",
+]
+
+Array = NDArray[np.float64]
+
+
+def conic_invariants(coeffs: ArrayLike) -> tuple[Array, Array]:
+    """δ = B² − 4AC and Δ, the 3×3 determinant of the conic (paper 004, eqs. 4–5).
+
+    Examples
+    --------
+    The unit circle X² + Y² − 1 = 0:
+
+    >>> conic_invariants([1, 0, 1, 0, 0, -1])
+    (np.float64(-4.0), np.float64(-1.0))
+    """
+    A, B, C, D, E, F = np.moveaxis(np.asarray(coeffs, dtype=float), -1, 0)
+    delta = B * B - 4.0 * A * C
+    big = (B * E * D - C * D * D - A * E * E - delta * F) / 4.0
+    return delta, big
+
+
+def conic_kind(coeffs: ArrayLike, *, tol: float = 1e-12) -> NDArray[np.str_]:
+    """What the conic is: ``ellipse``, ``point``, ``imaginary ellipse``, ``parabola``,
+    ``hyperbola`` or ``degenerate`` (a pair of lines, or not a conic at all).
+
+    The tests are on δ and Δ made scale-free (a conic times any k ≠ 0 is the same curve).
+
+    Examples
+    --------
+    >>> conic_kind([[1, 0, 4, 0, 0, -4], [1, 0, 1, 0, 0, 1], [1, 0, -1, 0, 0, -1]]).tolist()
+    ['ellipse', 'imaginary ellipse', 'hyperbola']
+    >>> conic_kind([0, 0, 1, -1, 0, 0]).item(), conic_kind([1, 0, 1, 0, 0, 0]).item()
+    ('parabola', 'point')
+    """
+    c = np.asarray(coeffs, dtype=float)
+    size = np.max(np.abs(c), axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit = c / size[..., None]
+    delta, big = conic_invariants(unit)
+    quad = np.abs(unit[..., 0]) + np.abs(unit[..., 1]) + np.abs(unit[..., 2])
+    flat_delta = np.abs(delta) <= tol * np.maximum(quad * quad, 1.0)
+    flat_big = np.abs(big) <= tol
+    A, C = unit[..., 0], unit[..., 2]
+    trace_sign = np.sign(A + C)
+    kind = np.where(
+        flat_delta,
+        np.where(flat_big, "degenerate", "parabola"),
+        np.where(
+            delta > 0,
+            np.where(flat_big, "degenerate", "hyperbola"),
+            np.where(
+                flat_big, "point", np.where(trace_sign * big < 0, "ellipse", "imaginary ellipse")
+            ),
+        ),
+    )
+    return np.where((size > 0) & np.isfinite(size) & (quad > 0), kind, "degenerate")
+
+
+def normalise_conic(coeffs: ArrayLike) -> Array:
+    """The coefficients scaled by k = −16Δ/δ² (paper 004, eq. 10), so that δ² = −16Δ.
+
+    After this scaling an ellipse's coefficients are those of eq. 3 for every double slider that
+    traces it, and A + C, √(B² + (A − C)²) are a² + b², a² − b² (eq. 11). NaN where the conic
+    is not an ellipse (δ ≥ 0 or Δ = 0).
+
+    Examples
+    --------
+    The ellipse X²/9 + Y² = 1 written with any scale comes back as X² + 9Y² − 9 = 0:
+
+    >>> normalise_conic([2, 0, 18, 0, 0, -18]).round(12)
+    array([ 1.,  0.,  9.,  0.,  0., -9.])
+    """
+    c = np.asarray(coeffs, dtype=float)
+    delta, big = conic_invariants(c)
+    ok = (delta < 0) & (big != 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = np.where(ok, -16.0 * big / (delta * delta), np.nan)
+    return c * k[..., None]
+
+
+def ellipse_axes(coeffs: ArrayLike) -> dict[str, Array]:
+    """Centre, semi-axes and orientation of the ellipse of a conic (any scale).
+
+    Returns ``center`` (``(..., 2)``), ``semi_major``, ``semi_minor`` and ``orientation`` (the
+    major axis's direction, radians in (−π/2, π/2]). The centre solves the gradient's zero
+    (paper 004, eq. 7); the axes come from the eigenvalues of the quadratic part, which is
+    an independent route to eq. 11. NaN where the conic is not a real ellipse.
+
+    Examples
+    --------
+    >>> e = ellipse_axes([1, 0, 9, -2, 0, -8])   # (X − 1)²/9 + Y² = 1
+    >>> e["center"] + 0.0, float(e["semi_major"]), float(e["semi_minor"]), float(e["orientation"])
+    (array([1., 0.]), 3.0, 1.0, 0.0)
+    """
+    c = np.asarray(coeffs, dtype=float)
+    real = conic_kind(c) == "ellipse"
+    A, B, C, D, E, F = np.moveaxis(c, -1, 0)
+    delta = B * B - 4.0 * A * C
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x0 = (2.0 * C * D - B * E) / delta
+        y0 = (2.0 * A * E - B * D) / delta
+        # The value of the conic at its centre: the quadratic part equals −f0 on the ellipse.
+        f0 = F + 0.5 * (D * x0 + E * y0)
+        half = 0.5 * np.hypot(A - C, B)
+        mean = 0.5 * (A + C)
+        lam_small, lam_big = mean - half, mean + half
+        semi_major = np.sqrt(-f0 / lam_small)
+        semi_minor = np.sqrt(-f0 / lam_big)
+    # The major axis is the eigenvector of the smaller eigenvalue: angle ½·atan2(B, A − C) + 90°
+    # in the usual atan2 order (paper 004 prints eq. 12 in spreadsheet order).
+    orientation = 0.5 * np.arctan2(B, A - C) + 0.5 * np.pi
+    orientation = np.where(orientation > 0.5 * np.pi, orientation - np.pi, orientation)
+    nan = np.nan
+    return {
+        "center": np.where(real[..., None], np.stack((x0, y0), axis=-1), nan),
+        "semi_major": np.where(real, semi_major, nan),
+        "semi_minor": np.where(real, semi_minor, nan),
+        "orientation": np.where(real, orientation, nan),
+    }
+
+
+def doubleslider_conic(mechanism: Any) -> Array:
+    """The coefficients A..F of the double slider's ellipse, paper 004 eq. 3, as printed.
+
+    ``mechanism`` is a :class:`~linkwright.mechanisms.DoubleSlider` (angles in radians). The
+    result is already normalised (δ² = −16Δ, see the module notes).
+
+    Examples
+    --------
+    Archimedes' trammel with p = 3, q = 1 along +x: X²/9 + Y² = 1, normalised.
+
+    >>> from linkwright.mechanisms import DoubleSlider
+    >>> m = DoubleSlider(M=[0, 0], alpha=np.pi / 2, beta=0.0, p=3, q=1)
+    >>> doubleslider_conic(m).round(12) + 0.0
+    array([ 1.,  0.,  9.,  0.,  0., -9.])
+    """
+    al, be = np.asarray(mechanism.alpha, float), np.asarray(mechanism.beta, float)
+    p, q, h = (np.asarray(getattr(mechanism, k), float) for k in ("p", "q", "h"))
+    x0, y0 = np.moveaxis(np.asarray(mechanism.M, dtype=float), -1, 0)
+    s, c = np.sin, np.cos
+    pq = p + q
+    r = pq / s(al)
+    A = (r * s(al + be) * s(be) + h) ** 2 + (r * s(al + be) * c(be) - p) ** 2
+    B = -2.0 * (
+        pq * pq * c(al + be) * s(al + be) / s(al) ** 2
+        + r * (s(al + 2 * be) * h - c(al + 2 * be) * p)
+    )
+    C = (r * c(al + be) * s(be) + p) ** 2 + (r * c(al + be) * c(be) + h) ** 2
+    D = -2.0 * A * x0 - B * y0
+    E = -B * x0 - 2.0 * C * y0
+    F = A * x0 * x0 + B * x0 * y0 + C * y0 * y0 - (p * p + h * h - r * (p * s(al) - h * c(al))) ** 2
+    return np.stack(np.broadcast_arrays(A, B, C, D, E, F), axis=-1)
