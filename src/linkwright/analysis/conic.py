@@ -49,7 +49,10 @@ def conic_kind(coeffs: ArrayLike, *, tol: float = 1e-12) -> NDArray[np.str_]:
     """What the conic is: ``ellipse``, ``point``, ``imaginary ellipse``, ``parabola``,
     ``hyperbola`` or ``degenerate`` (a pair of lines, or not a conic at all).
 
-    The tests are on δ and Δ made scale-free (a conic times any k ≠ 0 is the same curve).
+    Scale-free tests, each against the rounding its own quantity carries: δ against the size
+    of the quadratic part; for a central conic, its value f0 at the centre (which is −a²·λ for
+    an ellipse) against the terms it was computed from, so a thin ellipse far from the origin
+    is still an ellipse and only a true point or line pair is degenerate.
 
     Examples
     --------
@@ -59,27 +62,32 @@ def conic_kind(coeffs: ArrayLike, *, tol: float = 1e-12) -> NDArray[np.str_]:
     ('parabola', 'point')
     """
     c = np.asarray(coeffs, dtype=float)
-    size = np.max(np.abs(c), axis=-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        unit = c / size[..., None]
-    delta, big = conic_invariants(unit)
-    quad = np.abs(unit[..., 0]) + np.abs(unit[..., 1]) + np.abs(unit[..., 2])
-    flat_delta = np.abs(delta) <= tol * np.maximum(quad * quad, 1.0)
-    flat_big = np.abs(big) <= tol
-    A, C = unit[..., 0], unit[..., 2]
-    trace_sign = np.sign(A + C)
+    A, B, C, D, E, F = np.moveaxis(c, -1, 0)
+    quad = np.maximum.reduce([np.abs(A), np.abs(B), np.abs(C)])
+    finite = np.all(np.isfinite(c), axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        a, b, cc, d, e, f = (x / quad for x in (A, B, C, D, E, F))
+        delta = b * b - 4.0 * a * cc
+        flat_delta = np.abs(delta) <= 8 * tol * (b * b + 4.0 * np.abs(a * cc))
+        x0 = (2.0 * cc * d - b * e) / delta
+        y0 = (2.0 * a * e - b * d) / delta
+        f0 = f + 0.5 * (d * x0 + e * y0)
+        noise = np.abs(f) + 0.5 * (np.abs(d * x0) + np.abs(e * y0))
+        centred_flat = np.abs(f0) <= 64 * tol * noise
+        big = (b * e * d - cc * d * d - a * e * e - delta * f) / 4.0
+        scale3 = np.maximum(1.0, np.maximum.reduce([np.abs(d), np.abs(e), np.abs(f)])) ** 3
+        parabola_flat = np.abs(big) <= tol * scale3
+    real = -np.sign(a + cc) * f0 > 0
     kind = np.where(
         flat_delta,
-        np.where(flat_big, "degenerate", "parabola"),
+        np.where(parabola_flat, "degenerate", "parabola"),
         np.where(
             delta > 0,
-            np.where(flat_big, "degenerate", "hyperbola"),
-            np.where(
-                flat_big, "point", np.where(trace_sign * big < 0, "ellipse", "imaginary ellipse")
-            ),
+            np.where(centred_flat, "degenerate", "hyperbola"),
+            np.where(centred_flat, "point", np.where(real, "ellipse", "imaginary ellipse")),
         ),
     )
-    return np.where((size > 0) & np.isfinite(size) & (quad > 0), kind, "degenerate")
+    return np.where(finite & (quad > 0), kind, "degenerate")
 
 
 def normalise_conic(coeffs: ArrayLike) -> Array:

@@ -231,7 +231,9 @@ class GearedFiveBar(Mechanism):
     def residuals(self, motion: Motion) -> dict[str, Array]:
         s = np.asarray(self.scale)[..., None]
         b = motion.positions["B"] - motion.positions["B0"]
-        theta2 = self.crank2_angle(motion.input)
+        theta2 = np.asarray(self.phase2)[..., None] + np.asarray(self.ratio)[..., None] * (
+            motion.input - np.asarray(self.phase1)[..., None]
+        )
         gear = plane.cross(plane.unit_direction(theta2), b)  # B − B0 off its geared direction
         return {
             "crank1": _link_error(motion, "A0", "A", self.crank1) / s,
