@@ -133,10 +133,10 @@ def test_fivebar_derivatives_against_central_differences():
 def test_fivebar_locking_positions_are_exact_roots():
     """At each locking position |AB| is exactly link1 + link2 or |link1 − link2|."""
     rng = np.random.default_rng(2004)
-    m = random_fivebars(rng, 400)
+    m = random_fivebars(rng, 200)
     arcs = input_range(m)
     partial = ~(arcs.full | arcs.never)
-    assert partial.sum() > 50
+    assert partial.sum() > 25
     ends = np.concatenate((arcs.lo, arcs.hi), -1)
     motion = solve(m, np.where(np.isfinite(ends), ends, 0.0), order=0)
     ab = _norm(motion.positions["B"] - motion.positions["A"])
@@ -277,7 +277,7 @@ def test_doubleslider_forward_relations_hold():
 def test_doubleslider_ellipse_axes_from_conjugate_diameters():
     """P = M + U cos θ + V sin θ: the semi-axes are the singular values of [U V]."""
     rng = np.random.default_rng(4005)
-    m = random_doublesliders(rng, 2000)
+    m = random_doublesliders(rng, 500)
     p0, p1 = (solve(m, [t], order=0).positions["P"][..., 0, :] for t in (0.0, np.pi / 2))
     centre = np.asarray(m.M)
     w = np.stack((p0 - centre, p1 - centre), -1)  # columns U, V
@@ -289,13 +289,13 @@ def test_doubleslider_ellipse_axes_from_conjugate_diameters():
     np.testing.assert_allclose(e["semi_minor"][ok], s[ok, 1], rtol=1e-6)
     np.testing.assert_allclose(e["center"][ok], centre[ok], atol=1e-8 * np.max(np.abs(centre)))
     # The major axis: the point of the ellipse farthest from the centre lies along it.
-    theta = np.linspace(0, 2 * np.pi, 4096, endpoint=False)
+    theta = np.linspace(0, 2 * np.pi, 1024, endpoint=False)
     far = solve(m, theta, order=0).positions["P"] - centre[:, None, :]
     k = np.argmax(_norm(far), -1)
     d = np.take_along_axis(far, k[:, None, None], 1)[:, 0]
     axis = np.stack((np.cos(e["orientation"]), np.sin(e["orientation"])), -1)
     clear = ok & (s[:, 1] < 0.9 * s[:, 0])
-    assert np.all(np.abs(_cross(axis, d / _norm(d)[:, None]))[clear] < 1e-3)
+    assert np.all(np.abs(_cross(axis, d / _norm(d)[:, None]))[clear] < 1e-2)
 
 
 def test_doubleslider_derivatives_and_refusals():
@@ -364,7 +364,7 @@ def random_two_dyads(rng, n):
 
 def test_walker_closes_every_circuit_without_a_jump():
     rng = np.random.default_rng(3003)
-    params = random_two_dyads(rng, 300)
+    params = random_two_dyads(rng, 150)
     arcs = input_arcs(TWO_DYADS, params, points=POINTS)
     ok = ~arcs.never
     steps = {}
