@@ -550,6 +550,49 @@ def demo(
         sys.stdout.write(f"{result}\n")
 
 
+PAPERS = {
+    "002": "geared five-bar: the original curve, its speed, the pivot-moving study",
+    "003": "four-bar tables 1, 2 and 4 (planar halves), printed beside ours",
+    "004": "double slider: eqs. 3-5 and 9 checked on 10,000 random linkages",
+}
+
+
+@app.command()
+def papers(
+    paper: Annotated[
+        str,
+        typer.Argument(
+            metavar="ID", help="Which paper: " + ", ".join(PAPERS) + ".", show_default=False
+        ),
+    ],
+    out: Annotated[
+        Path, typer.Option("--out", metavar="DIR", help="Folder to write the files into.")
+    ] = Path("papers"),
+) -> None:
+    """Regenerate a seed paper's tables and figures with linkwright's numbers."""
+    key = paper.strip().zfill(3)
+    if key in ("000", "001"):
+        raise CliError(f"paper {key} needs spherical linkages, which are not built yet")
+    if key not in PAPERS:
+        raise CliError(f"unknown paper {paper!r} (known: {', '.join(PAPERS)})")
+    out.mkdir(parents=True, exist_ok=True)
+    if key == "002":
+        from linkwright.papers.p002 import reproduce
+
+        written = reproduce(out)
+    elif key == "004":
+        from linkwright.papers.p004 import reproduce as reproduce4
+
+        written = reproduce4(out)
+    else:
+        from linkwright.demo import paper003_markdown
+
+        page = out / "paper003-planar.md"
+        page.write_text(paper003_markdown(), encoding="utf-8")
+        written = [page]
+    sys.stdout.write("".join(f"{path}\n" for path in written))
+
+
 # --------------------------------------------------------------------------------------------
 # Entry point
 # --------------------------------------------------------------------------------------------

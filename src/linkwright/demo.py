@@ -41,7 +41,8 @@ def _cell(report: dict[str, Any], key: Any) -> str:
     return str(value)
 
 
-def _paper003_markdown() -> str:
+def paper003_markdown() -> str:
+    """Paper 003's planar tables as a markdown page, printed values beside ours."""
     from linkwright.papers.p003 import reproduce_planar
 
     lines = [
@@ -77,6 +78,25 @@ def _paper003_markdown() -> str:
     return "\n".join(lines) + "\n"
 
 
+def _row_view(family: str, report: dict[str, Any]) -> dict[str, Any]:
+    """The summary columns for a family without paper 003's report: its family as the class,
+    its input arc, and the transmission angle's extremes over all its dyads."""
+    if "class" in report:
+        return report
+    angles = report.get("transmission_angle_deg", {}).values()
+    lows = [a["min"] for a in angles if a["min"] is not None]
+    highs = [a["max"] for a in angles if a["max"] is not None]
+    arcs = report.get("input_arcs_deg") or []
+    return {
+        "class": family,
+        "input_range_deg": arcs[0] if arcs and not report.get("input_turns_fully") else None,
+        "transmission_angle_deg": {
+            "min": min(lows) if lows else None,
+            "max": max(highs) if highs else None,
+        },
+    }
+
+
 def run_demo(out_dir: str | Path = "out") -> str:
     """Write every bundled example's curve and diagram pictures and a summary into ``out_dir``.
 
@@ -84,7 +104,9 @@ def run_demo(out_dir: str | Path = "out") -> str:
     """
     from linkwright.analysis import analyze
     from linkwright.io import list_examples, load_example
+    from linkwright.papers import p002, p004
     from linkwright.plot import plot_curves, plot_diagrams, save_figure
+    from linkwright.plot.generic import plot_linkage, plot_speed
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -96,15 +118,22 @@ def run_demo(out_dir: str | Path = "out") -> str:
         doc = load_example(name)
         report = analyze(doc.mechanism)
         reports[name] = {"title": doc.title, **report}
-        save_figure(plot_curves(doc.mechanism, title=doc.title), out / f"{name}-curves.png")
-        save_figure(plot_diagrams(doc.mechanism, title=doc.title), out / f"{name}-diagrams.png")
+        if doc.family in ("fourbar", "slidercrank"):
+            save_figure(plot_curves(doc.mechanism, title=doc.title), out / f"{name}-curves.png")
+            diagrams = plot_diagrams(doc.mechanism, title=doc.title)
+        else:
+            save_figure(plot_linkage(doc.mechanism, title=doc.title), out / f"{name}-curves.png")
+            diagrams = plot_speed(doc.mechanism)
+        save_figure(diagrams, out / f"{name}-diagrams.png")
         rows.append(
             f"| [{name}]({name}-curves.png) | {doc.title or ''} | "
-            + " | ".join(_cell(report, key) for _, key in SUMMARY_COLUMNS)
+            + " | ".join(_cell(_row_view(doc.family, report), key) for _, key in SUMMARY_COLUMNS)
             + " |"
         )
     print(f"[{len(names)}/{len(names)}] paper 003 tables", file=sys.stderr, flush=True)
-    (out / "paper003-planar.md").write_text(_paper003_markdown(), encoding="utf-8")
+    (out / "paper003-planar.md").write_text(paper003_markdown(), encoding="utf-8")
+    print(f"[{len(names)}/{len(names)}] papers 002 and 004", file=sys.stderr, flush=True)
+    extra = len(p002.reproduce(out)) + len(p004.reproduce(out))
     header = "| example | title | " + " | ".join(h for h, _ in SUMMARY_COLUMNS) + " |"
     rule = "|" + "---|" * (len(SUMMARY_COLUMNS) + 2)
     summary = [
@@ -119,8 +148,10 @@ def run_demo(out_dir: str | Path = "out") -> str:
         *rows,
         "",
         "Paper 003's planar tables, reproduced: [paper003-planar.md](paper003-planar.md).",
+        "Paper 002's five-bar study: [paper002.md](paper002.md); paper 004's double slider: "
+        "[paper004.md](paper004.md).",
         "",
     ]
     (out / "summary.md").write_text("\n".join(summary), encoding="utf-8")
     (out / "summary.json").write_text(json.dumps(reports, indent=2) + "\n", encoding="utf-8")
-    return f"wrote {2 * len(names) + 3} files to {out}/ — start with {out / 'summary.md'}"
+    return f"wrote {2 * len(names) + 3 + extra} files to {out}/ — start with {out / 'summary.md'}"

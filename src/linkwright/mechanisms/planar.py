@@ -224,6 +224,52 @@ class GearedFiveBar(Mechanism):
         p["gear_phase"] = p["phase2"] - p["ratio"] * p["phase1"]
         return p
 
+    @classmethod
+    def from_drawing(
+        cls,
+        A0: ArrayLike,
+        A: ArrayLike,
+        B0: ArrayLike,
+        B: ArrayLike,
+        P: ArrayLike,
+        *,
+        ratio: ArrayLike = -1.0,
+    ) -> GearedFiveBar:
+        """The five-bar a user draws in paper 002's tool: points 1, 2, 3, 4 and the traced 6.
+
+        The user places the crank pivots A0 (point 1) and B0 (3), the crank ends A (2) and B (4)
+        and the traced point P (6); C (5) is the midpoint of A–P, so link1 = |AP|/2,
+        link2 = |BC|, and P lies on the line AC beyond C (u = 2·link1, v = 0). The cranks'
+        drawn angles become the phases, and the drawn side of C the assembly.
+
+        Examples
+        --------
+        C is the midpoint (1, 3) of A = (0, 1) and P = (2, 5): link1 = √5, link2 = |(−3, 1.8)|,
+        and C lies left of A→B.
+
+        >>> m = GearedFiveBar.from_drawing([0, 0], [0, 1], [4, 0], [4, 1.2], [2, 5])
+        >>> round(float(m.link1) ** 2, 12), round(float(m.link2) ** 2, 12), float(m.assembly)
+        (5.0, 12.24, 1.0)
+        """
+        a0, a, b0, b, p = (np.asarray(x, dtype=float) for x in (A0, A, B0, B, P))
+        c = 0.5 * (a + p)
+        arm1, arm2 = a - a0, b - b0
+        link1 = plane.norm(c - a)
+        return cls(
+            A0=a0,
+            B0=b0,
+            crank1=plane.norm(arm1),
+            crank2=plane.norm(arm2),
+            link1=link1,
+            link2=plane.norm(c - b),
+            phase1=np.arctan2(arm1[..., 1], arm1[..., 0]),
+            phase2=np.arctan2(arm2[..., 1], arm2[..., 0]),
+            ratio=ratio,
+            u=2.0 * link1,
+            v=0.0,
+            assembly=np.where(plane.cross(b - a, c - a) >= 0, 1.0, -1.0),
+        )
+
     def crank2_angle(self, theta1: ArrayLike) -> Array:
         """θ2, the angle of B − B0, at the input θ1 (radians)."""
         return self.phase2 + self.ratio * (np.asarray(theta1) - self.phase1)
