@@ -63,16 +63,20 @@ def _is_ground(plan: Plan, name: str) -> bool:
     return isinstance(plan.step(name), Fixed)
 
 
-def _turns_with_input(plan: Plan, name: str) -> bool:
+def _turns_with_input(plan: Plan, name: str, params: Mapping | None = None) -> bool:
+    """A ground pivot, or a joint on a ground crank turning one-for-one with the input.
+
+    The ratio may be a constant or a named parameter that is 1 for the whole batch.
+    """
     step = plan.step(name)
     if isinstance(step, Fixed):
         return True
-    return (
-        isinstance(step, Crank)
-        and not isinstance(step.ratio, str)
-        and step.ratio == 1.0
-        and _is_ground(plan, step.pivot)
-    )
+    if not isinstance(step, Crank) or not _is_ground(plan, step.pivot):
+        return False
+    ratio = step.ratio
+    if isinstance(ratio, str):
+        return params is not None and bool(np.all(np.asarray(params[ratio]) == 1.0))
+    return ratio == 1.0
 
 
 def _closure(plan: Plan, dyad: DyadRRR | DyadRRP, states: Mapping, params, points) -> Array:
@@ -418,7 +422,7 @@ def input_arcs(
         )
     analytic_ok = (
         len(dyads) == 1
-        and all(_turns_with_input(plan, p) for p in dyads[0].parents)
+        and all(_turns_with_input(plan, p, params) for p in dyads[0].parents)
         and np.all(turns == 1)
     )
     if method == "analytic" and not analytic_ok:
