@@ -5,11 +5,14 @@ from __future__ import annotations
 import contextlib
 import copy
 import dataclasses
+import importlib
 import json
 import math
 import os
 import stat
 import tempfile
+import textwrap
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +20,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import linkwright.mechanisms
 from linkwright.io import (
     FAMILY_SPECS,
     Document,
@@ -29,9 +33,52 @@ from linkwright.io import (
     parse_document,
     save_document,
 )
-from linkwright.mechanisms import FourBar, SliderCrank
+from linkwright.io.documents import JOINT_SPECS, KINDS, dumps_toml
+from linkwright.mechanisms import FAMILIES, FourBar, SliderCrank, solve
+from linkwright.mechanisms.linkage import CrankJoint, DyadJoint, FixedJoint, Linkage, RigidJoint
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "linkwright" / "examples"
+EXAMPLE_NAMES = [
+    "crank-rocker",
+    "double-crank",
+    "rocker-input",
+    "triple-rocker",
+    "slider-crank",
+    "offset-slider-crank",
+    "jansen-leg",
+    "klann-leg",
+]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def linkage_family():
+    """Documents of family ``linkage`` need the class in FAMILIES (the lead registers it there;
+    until then this module registers it for its own tests)."""
+    with pytest.MonkeyPatch.context() as mp:
+        if "linkage" not in FAMILIES:
+            mp.setitem(FAMILIES, "linkage", Linkage)
+        yield
+
+
+# Read before any fixture runs: whether the package itself registers the linkage family.
+LINKAGE_REGISTERED = FAMILIES.get("linkage") is Linkage
+
+
+def family_class(family: str, cls_name: str) -> type:
+    """The class of a family whose schema is here, or a skip saying what is missing."""
+    cls = getattr(linkwright.mechanisms, cls_name, None)
+    if cls is None:
+        try:
+            module = importlib.import_module("linkwright.mechanisms.sixbar")
+        except ImportError:
+            module = None
+        cls = getattr(module, cls_name, None)
+    if cls is None:
+        pytest.skip(f"linkwright.mechanisms.{cls_name} is not written yet")
+    if FAMILIES.get(family) is not cls:
+        pytest.skip(f"family {family!r} is not registered in linkwright.mechanisms.FAMILIES yet")
+    return cls
+
 
 FOURBAR = {
     "format": "linkwright/1",
@@ -169,7 +216,8 @@ FOURBAR_ERRORS = [
     (
         "mechanism.family",
         "sixbar",
-        "mechanism.family: unknown family 'sixbar' (known: fourbar, slidercrank)",
+        "mechanism.family: unknown family 'sixbar' (known: fourbar, slidercrank, geared-fivebar, "
+        "doubleslider, watt1, watt2, stephenson1, stephenson3, linkage)",
     ),
     ("mechanism.family", 4, "mechanism.family: must be a string, got 4"),
     ("format", "linkwright/9", 'format: expected "linkwright/1", got "linkwright/9"'),
@@ -318,17 +366,7 @@ def test_toml_and_json_have_the_same_structure(tmp_path):
     assert json.loads(json_path.read_text())["mechanism"]["point"] == {"u": 2.0, "v": 1.0}
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        "crank-rocker",
-        "double-crank",
-        "rocker-input",
-        "triple-rocker",
-        "slider-crank",
-        "offset-slider-crank",
-    ],
-)
+@pytest.mark.parametrize("name", EXAMPLE_NAMES)
 @pytest.mark.parametrize("suffix", [".toml", ".json"])
 def test_round_trip_load_save_load(tmp_path, name, suffix):
     first = load_document(EXAMPLES / f"{name}.toml")
@@ -375,7 +413,9 @@ def test_mechanism_to_dict_converts_radians_back_to_degrees():
     assert parse_document(d).raw == d
 
 
-@pytest.mark.parametrize("name", ["crank-rocker", "offset-slider-crank", "triple-rocker"])
+@pytest.mark.parametrize(
+    "name", ["crank-rocker", "offset-slider-crank", "triple-rocker", "jansen-leg", "klann-leg"]
+)
 def test_mechanism_round_trip_through_dict(name):
     doc = load_example(name)
     d = mechanism_to_dict(doc.mechanism, title=doc.title)
@@ -437,30 +477,13 @@ def test_save_keeps_an_existing_files_permissions(tmp_path):
 
 
 def test_list_examples():
-    assert set(list_examples()) >= {
-        "crank-rocker",
-        "double-crank",
-        "rocker-input",
-        "triple-rocker",
-        "slider-crank",
-        "offset-slider-crank",
-    }
+    assert set(list_examples()) >= set(EXAMPLE_NAMES)
     assert load_example("crank-rocker.toml") == load_example("crank-rocker")
     with pytest.raises(DocumentError, match=r"^example: unknown example 'crank-rocke' \(did you"):
         load_example("crank-rocke")
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        "crank-rocker",
-        "double-crank",
-        "rocker-input",
-        "triple-rocker",
-        "slider-crank",
-        "offset-slider-crank",
-    ],
-)
+@pytest.mark.parametrize("name", EXAMPLE_NAMES)
 def test_examples_have_a_title_and_a_provenance_comment(name):
     text = (EXAMPLES / f"{name}.toml").read_text()
     assert text.startswith("# ")
@@ -513,12 +536,45 @@ def test_slider_examples_offsets():
     assert float(offset.mechanism.offset) == pytest.approx(0.5)
 
 
-def test_family_specs_cover_the_mechanism_families():
-    from linkwright.mechanisms import FAMILIES
+CLASS_NAMES = {
+    "fourbar": "FourBar",
+    "slidercrank": "SliderCrank",
+    "geared-fivebar": "GearedFiveBar",
+    "doubleslider": "DoubleSlider",
+    "watt1": "Watt1",
+    "watt2": "Watt2",
+    "stephenson1": "Stephenson1",
+    "stephenson3": "Stephenson3",
+    "linkage": "Linkage",
+}
 
-    for family, spec in FAMILY_SPECS.items():
-        targets = {t for f in spec.fields for t in f.targets}
-        assert targets == {f.name for f in dataclasses.fields(FAMILIES[family])}, family
+
+def test_every_schema_names_its_class():
+    assert set(CLASS_NAMES) == set(FAMILY_SPECS)
+
+
+@pytest.mark.parametrize("family", sorted(FAMILY_SPECS))
+def test_family_specs_cover_the_mechanism_families(family):
+    cls = Linkage if family == "linkage" else family_class(family, CLASS_NAMES[family])
+    spec = FAMILY_SPECS[family]
+    # Fields that only say how to read the document (a linkage's space) build nothing.
+    targets = {t for f in spec.fields if KINDS[f.kind].builds for t in f.targets}
+    assert targets == {f.name for f in dataclasses.fields(cls)}, family
+
+
+def test_linkage_is_registered_as_a_family():
+    if not LINKAGE_REGISTERED:
+        pytest.skip("Linkage is not registered in linkwright.mechanisms.FAMILIES yet")
+    assert Linkage.family == "linkage"
+
+
+def test_joint_specs_cover_the_joint_classes():
+    from linkwright.mechanisms.linkage import JOINT_TYPES
+
+    assert set(JOINT_SPECS) == set(JOINT_TYPES)
+    for kind, specs in JOINT_SPECS.items():
+        names = {f.name for f in dataclasses.fields(JOINT_TYPES[kind])} - {"name"}
+        assert {t for f in specs for t in f.targets} == names, kind
 
 
 # ---------------------------------------------------------------------------------------------
@@ -620,3 +676,507 @@ def test_fuzz_round_trip_of_any_title_and_numbers(title, crank, angle, suffix):
     with tempfile.TemporaryDirectory() as tmp:
         path = save_document(parsed, Path(tmp) / f"doc{suffix}")
         assert load_document(path) == parsed
+
+
+# ---------------------------------------------------------------------------------------------
+# The geared five-bar, the double slider and the six-bars
+# ---------------------------------------------------------------------------------------------
+
+FIVEBAR = {
+    "format": "linkwright/1",
+    "mechanism": {
+        "family": "geared-fivebar",
+        "A0": [0, 0],
+        "B0": [4, 0],
+        "crank1": 1,
+        "crank2": 1.5,
+        "link1": 3,
+        "link2": 3.5,
+        "phase2": 45,
+    },
+}
+DOUBLESLIDER = {
+    "format": "linkwright/1",
+    "mechanism": {
+        "family": "doubleslider",
+        "M": [1, 2],
+        "alpha": 90,
+        "beta": 30,
+        "p": 3,
+        "q": -1,
+    },
+}
+
+
+def sixbar(family: str) -> dict:
+    mech = {
+        "family": family,
+        "A0": [0, 0],
+        "B0": [4, 0],
+        "crank": 1,
+        "coupler": 5,
+        "rocker": 3.5,
+        "C": {"u": 0.5, "v": 0.8},
+        "link1": 4,
+        "link2": 3,
+        "point": {"u": 1, "v": 0.5},
+        "assembly2": -1,
+    }
+    if family in ("watt1", "stephenson1"):
+        mech["E"] = {"u": 2.0, "v": 1.0}
+    else:
+        mech["D0"] = [6, 2]
+    return {"format": "linkwright/1", "mechanism": mech}
+
+
+def test_geared_fivebar_document_defaults_and_degrees():
+    cls = family_class("geared-fivebar", "GearedFiveBar")
+    doc = parse_document(FIVEBAR)
+    m = doc.mechanism
+    assert isinstance(m, cls)
+    raw = doc.raw["mechanism"]
+    assert (raw["phase1"], raw["ratio"], raw["assembly"]) == (0.0, -1.0, 1)
+    assert raw["point"] == {"u": 0.0, "v": 0.0}
+    assert float(m.phase2) == pytest.approx(math.pi / 4, abs=1e-15)
+    assert float(m.ratio) == -1.0 and float(m.crank2) == 1.5
+    assert parse_document(mechanism_to_dict(m)).raw == doc.raw
+
+
+def test_geared_fivebar_pivots_may_coincide():
+    family_class("geared-fivebar", "GearedFiveBar")
+    doc = parse_document(with_change(FIVEBAR, "mechanism.B0", [0, 0]))
+    np.testing.assert_array_equal(doc.mechanism.B0, [0, 0])
+
+
+FIVEBAR_ERRORS = [
+    ("mechanism.ratio", 0, "mechanism.ratio: must be a nonzero number, got 0"),
+    ("mechanism.ratio", "2:1", 'mechanism.ratio: must be a nonzero number, got "2:1"'),
+    ("mechanism.ratio", math.inf, "mechanism.ratio: must be a finite number, got inf"),
+    ("mechanism.phase1", None, "mechanism.phase1: must be an angle in degrees, got null"),
+    ("mechanism.link2", -3, "mechanism.link2: must be a positive number, got -3"),
+    ("mechanism.crank", 1, "mechanism: unknown field 'crank' (did you mean 'crank"),
+]
+
+
+@pytest.mark.parametrize(("path", "value", "message"), FIVEBAR_ERRORS)
+def test_geared_fivebar_validation_messages(path, value, message):
+    with pytest.raises(DocumentError) as info:
+        parse_document(with_change(FIVEBAR, path, value))
+    assert str(info.value).startswith(message)
+
+
+def test_doubleslider_document():
+    cls = family_class("doubleslider", "DoubleSlider")
+    doc = parse_document(DOUBLESLIDER)
+    m = doc.mechanism
+    assert isinstance(m, cls)
+    assert doc.raw["mechanism"]["h"] == 0.0
+    assert float(m.alpha) == pytest.approx(math.pi / 2, abs=1e-15)
+    assert float(m.beta) == pytest.approx(math.pi / 6, abs=1e-15)
+    assert (float(m.p), float(m.q)) == (3.0, -1.0)
+    assert parse_document(mechanism_to_dict(m)).raw == doc.raw
+
+
+DOUBLESLIDER_ERRORS = [
+    (
+        "mechanism.alpha",
+        180,
+        "mechanism.alpha: must not be a multiple of 180 degrees, got 180.0 (the slider lines",
+    ),
+    ("mechanism.alpha", 0, "mechanism.alpha: must not be a multiple of 180 degrees, got 0"),
+    ("mechanism.alpha", -540.0, "mechanism.alpha: must not be a multiple of 180 degrees"),
+    ("mechanism.q", -3, "mechanism.q: p + q must not be 0 (the sliders R and Q would coincide)"),
+    ("mechanism.p", "3", 'mechanism.p: must be a number, got "3"'),
+    ("mechanism.h", math.nan, "mechanism.h: must be a finite number, got nan"),
+    ("mechanism.M", [1], "mechanism.M: must be a point [x, y], got [1]"),
+]
+
+
+@pytest.mark.parametrize(("path", "value", "message"), DOUBLESLIDER_ERRORS)
+def test_doubleslider_validation_messages(path, value, message):
+    with pytest.raises(DocumentError) as info:
+        parse_document(with_change(DOUBLESLIDER, path, value))
+    assert str(info.value).startswith(message)
+
+
+def test_doubleslider_negative_lengths_are_signed_numbers():
+    family_class("doubleslider", "DoubleSlider")
+    doc = parse_document(with_change(DOUBLESLIDER, "mechanism.h", -0.5))
+    assert float(doc.mechanism.h) == -0.5
+
+
+SIXBARS = [
+    ("watt1", "Watt1"),
+    ("watt2", "Watt2"),
+    ("stephenson1", "Stephenson1"),
+    ("stephenson3", "Stephenson3"),
+]
+
+
+@pytest.mark.parametrize(("family", "cls_name"), SIXBARS)
+def test_sixbar_documents(family, cls_name):
+    cls = family_class(family, cls_name)
+    doc = parse_document(sixbar(family))
+    m = doc.mechanism
+    assert isinstance(m, cls)
+    assert (float(m.u1), float(m.v1)) == (0.5, 0.8)
+    assert (float(m.u), float(m.v), float(m.assembly), float(m.assembly2)) == (1, 0.5, 1, -1)
+    if family in ("watt1", "stephenson1"):
+        assert (float(m.u2), float(m.v2)) == (2.0, 1.0)
+    else:
+        np.testing.assert_array_equal(m.D0, [6, 2])
+    if family == "stephenson3":
+        assert doc.raw["mechanism"]["input"] == "crank" and m.input == "crank"
+    assert parse_document(mechanism_to_dict(m)).raw == doc.raw
+
+
+SIXBAR_ERRORS = [
+    ("watt1", "mechanism.E", None, "mechanism.E: missing required field (a table {u = .., v"),
+    ("watt1", "mechanism.C", None, "mechanism.C: missing required field"),
+    ("watt1", "mechanism.D0", [1, 1], "mechanism: unknown field 'D0'"),
+    ("watt2", "mechanism.D0", None, "mechanism.D0: missing required field (a point [x, y])"),
+    ("watt2", "mechanism.E", {"u": 1}, "mechanism: unknown field 'E'"),
+    ("stephenson1", "mechanism.link1", 0, "mechanism.link1: must be a positive number, got 0"),
+    ("stephenson1", "mechanism.assembly2", 3, "mechanism.assembly2: must be 1 or -1, got 3"),
+    ("stephenson3", "mechanism.input", "coupler", "mechanism.input: unknown value 'coupler'"),
+    ("stephenson3", "mechanism.input", 1, 'mechanism.input: must be "crank" or "output", got 1'),
+    ("watt2", "mechanism.input", "crank", "mechanism: unknown field 'input'"),
+    ("stephenson3", "mechanism.B0", [0, 0], "mechanism.B0: coincides with mechanism.A0"),
+]
+
+
+@pytest.mark.parametrize(("family", "path", "value", "message"), SIXBAR_ERRORS)
+def test_sixbar_validation_messages(family, path, value, message):
+    doc = sixbar(family)
+    doc = with_change(doc, path, delete=True) if value is None else with_change(doc, path, value)
+    with pytest.raises(DocumentError) as info:
+        parse_document(doc)
+    assert str(info.value).startswith(message)
+
+
+def test_stephenson3_output_input_is_accepted_by_the_schema():
+    family_class("stephenson3", "Stephenson3")
+    doc = with_change(sixbar("stephenson3"), "mechanism.input", "output")
+    try:
+        parsed = parse_document(doc)
+    except DocumentError as exc:
+        # The class may not solve an output-driven Stephenson III yet; the schema accepted it.
+        assert not str(exc).startswith("mechanism.input")
+    else:
+        assert parsed.raw["mechanism"]["input"] == "output"
+
+
+def test_a_schema_whose_class_is_not_registered_is_a_document_error(monkeypatch):
+    monkeypatch.delitem(FAMILIES, "geared-fivebar", raising=False)
+    with pytest.raises(DocumentError) as info:
+        parse_document(FIVEBAR)
+    assert str(info.value) == (
+        "mechanism.family: family 'geared-fivebar' is not available in this version"
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Composed linkages
+# ---------------------------------------------------------------------------------------------
+
+LINKAGE = {
+    "format": "linkwright/1",
+    "title": "four-bar, joint by joint",
+    "mechanism": {
+        "family": "linkage",
+        "joints": [
+            {"name": "A0", "type": "fixed", "at": [0, 0]},
+            {"name": "B0", "type": "fixed", "at": [4, 0]},
+            {"name": "A", "type": "crank", "pivot": "A0", "length": 1, "phase": 30},
+            {"name": "B", "type": "rrr", "p1": "A", "r1": 5, "p2": "B0", "r2": 3.5},
+            {"name": "P", "type": "rigid", "origin": "A", "toward": "B", "u": 2, "v": 1},
+            {"name": "S", "type": "rrp", "p1": "B", "r": 2, "line_point": "B0", "line_angle": 90},
+        ],
+    },
+}
+
+
+def test_linkage_document_builds_the_linkage():
+    doc = parse_document(LINKAGE)
+    m = doc.mechanism
+    assert isinstance(m, Linkage) and doc.family == "linkage"
+    assert m.traced == ("S",)  # the last joint by default
+    raw = doc.raw["mechanism"]
+    assert raw["space"] == "plane" and raw["traced"] == ["S"]
+    assert raw["joints"][2] == {
+        "name": "A",
+        "type": "crank",
+        "pivot": "A0",
+        "length": 1.0,
+        "ratio": 1.0,
+        "phase": 30.0,
+    }
+    assert raw["joints"][3]["assembly"] == 1
+    assert float(m.joint("A").phase) == pytest.approx(math.pi / 6, abs=1e-15)
+    assert float(m.joint("S").line_angle) == pytest.approx(math.pi / 2, abs=1e-15)
+    assert m == Linkage(
+        joints=(
+            FixedJoint("A0", [0, 0]),
+            FixedJoint("B0", [4, 0]),
+            CrankJoint("A", "A0", 1, phase=math.radians(30)),
+            DyadJoint("B", "A", 5, "B0", 3.5),
+            RigidJoint("P", "A", "B", 2, 1),
+            m.joint("S"),
+        )
+    )
+
+
+def test_the_module_docstrings_linkage_example_is_the_crank_rocker_example():
+    import linkwright.io.documents as documents
+
+    text = documents.__doc__.split("tracing its coupler point P)::")[1]
+    doc = parse_document(tomllib.loads(textwrap.dedent(text)))
+    assert doc.family == "linkage" and doc.mechanism.traced == ("P",)
+    named = load_example("crank-rocker").mechanism
+    theta = np.linspace(0, 2 * np.pi, 12)
+    np.testing.assert_allclose(
+        solve(doc.mechanism, theta).positions["P"],
+        solve(named, theta).positions["P"],
+        rtol=0,
+        atol=1e-12,
+    )
+
+
+def test_linkage_round_trips_through_mechanism_to_dict_and_files(tmp_path):
+    doc = parse_document(with_change(LINKAGE, "mechanism.traced", ["P", "B"]))
+    d = mechanism_to_dict(doc.mechanism, title=doc.title)
+    assert d == document_to_dict(doc)
+    assert parse_document(d) == doc
+    for suffix in (".toml", ".json"):
+        path = save_document(doc, tmp_path / f"l{suffix}")
+        assert load_document(path) == doc
+    text = (tmp_path / "l.toml").read_text()
+    assert text.count("[[mechanism.joints]]") == 6
+    assert 'traced = ["P", "B"]' in text
+
+
+def test_linkage_from_code_round_trips():
+    m = Linkage(
+        joints=(
+            FixedJoint("O", [0.0, 0.0]),
+            CrankJoint("A", "O", 1.0, ratio=-2.0, phase=math.radians(-45)),
+            CrankJoint("G", "A", 0.25),
+        ),
+        traced=("G", "A"),
+    )
+    d = mechanism_to_dict(m)
+    assert d["mechanism"]["joints"][1]["phase"] == -45.0
+    assert d["mechanism"]["joints"][1]["ratio"] == -2.0
+    assert parse_document(d).mechanism == m
+
+
+def test_mechanism_to_dict_refuses_a_batched_linkage_naming_the_joint():
+    m = Linkage(joints=(FixedJoint("O", [0, 0]), CrankJoint("A", "O", [1.0, 2.0])))
+    with pytest.raises(DocumentError, match=r"^mechanism\.joints\[1\]\.length: must be a single"):
+        mechanism_to_dict(m)
+
+
+def joint_change(index: int, key: str, value: object = ..., delete: bool = False) -> dict:
+    doc = copy.deepcopy(LINKAGE)
+    entry = doc["mechanism"]["joints"][index]
+    if delete:
+        del entry[key]
+    else:
+        entry[key] = value
+    return doc
+
+
+LINKAGE_ERRORS = [
+    (joint_change(3, "r1", -2), "mechanism.joints[3].r1: must be a positive number, got -2"),
+    (
+        joint_change(3, "r3", 1),
+        "mechanism.joints[3]: unknown field 'r3' (known: name, type, p1, r1, p2, r2, assembly)",
+    ),
+    (joint_change(3, "assmbly", 1), "mechanism.joints[3]: unknown field 'assmbly' (did you mean"),
+    (joint_change(3, "r1", delete=True), "mechanism.joints[3].r1: missing required field"),
+    (joint_change(3, "assembly", 0), "mechanism.joints[3].assembly: must be 1 or -1, got 0"),
+    (joint_change(2, "ratio", 0), "mechanism.joints[2].ratio: must be a nonzero number, got 0"),
+    (joint_change(2, "phase", "30deg"), "mechanism.joints[2].phase: must be an angle in degrees"),
+    (joint_change(0, "at", [0]), "mechanism.joints[0].at: must be a point [x, y], got [0]"),
+    (joint_change(4, "u", None), "mechanism.joints[4].u: must be a number, got null"),
+    (joint_change(5, "line_angle", delete=True), "mechanism.joints[5].line_angle: missing"),
+    (
+        joint_change(3, "p1", ""),
+        "mechanism.joints[3].p1: must be a joint name (a non-empty string)",
+    ),
+    (joint_change(3, "p1", 7), "mechanism.joints[3].p1: must be a joint name (a non-empty string)"),
+    (joint_change(3, "name", delete=True), "mechanism.joints[3].name: missing required field"),
+    (joint_change(3, "type", delete=True), "mechanism.joints[3].type: missing required field (one"),
+    (joint_change(3, "type", "rr"), "mechanism.joints[3].type: unknown joint type 'rr' (did you"),
+    (joint_change(3, "type", 3), "mechanism.joints[3].type: must be a string, got 3"),
+    (
+        joint_change(3, "p1", "X"),
+        "mechanism.joints[3]: joint 'B' is built from 'X', which is not placed before it (no "
+        "joint has that name; under-constrained)",
+    ),
+    (
+        joint_change(3, "p1", "P"),
+        "mechanism.joints[3]: joint 'B' is built from 'P', which is not placed before it (it is "
+        "listed after it; under-constrained)",
+    ),
+    (joint_change(3, "p2", "A"), "mechanism.joints[3]: joint 'B': p1 and p2 are both 'A'"),
+    (joint_change(1, "name", "A0"), "mechanism.joints[1]: joint 'A0' is listed twice"),
+    (
+        joint_change(1, "at", [0, 0]),
+        "mechanism.joints[1]: joint 'B0' repeats joint 'A0' (a ground pivot at the same place)",
+    ),
+    (
+        joint_change(4, "toward", "B0"),
+        "mechanism.joints[4]: joint 'P' is fixed on the link 'A'→'B0', but those two joints are "
+        "not on one rigid link",
+    ),
+    (
+        with_change(LINKAGE, "mechanism.joints", [{"name": "O", "type": "fixed", "at": [0, 0]}]),
+        "mechanism.joints: nothing drives the linkage: none of its joints is a crank",
+    ),
+    (
+        with_change(LINKAGE, "mechanism.joints", []),
+        "mechanism.joints: a linkage needs joints",
+    ),
+    (with_change(LINKAGE, "mechanism.joints", {"A": 1}), "mechanism.joints: must be a list"),
+    (with_change(LINKAGE, "mechanism.joints", [3]), "mechanism.joints[0]: must be a joint table"),
+    (
+        with_change(LINKAGE, "mechanism.joints", delete=True),
+        "mechanism.joints: missing required field (a list of joint tables",
+    ),
+    (with_change(LINKAGE, "mechanism.traced", ["Q"]), "mechanism.traced[0]: unknown joint 'Q'"),
+    (with_change(LINKAGE, "mechanism.traced", []), "mechanism.traced: must name at least one"),
+    (with_change(LINKAGE, "mechanism.traced", "P"), "mechanism.traced: must be a list of joint"),
+    (with_change(LINKAGE, "mechanism.traced", ["P", "P"]), "mechanism.traced[1]: joint 'P' is"),
+    (with_change(LINKAGE, "mechanism.traced", [1]), "mechanism.traced[0]: must be a joint name"),
+    (
+        with_change(LINKAGE, "mechanism.space", "sphere"),
+        'mechanism.space: spherical linkages are not supported yet (the only space is "plane")',
+    ),
+    (with_change(LINKAGE, "mechanism.space", "plain"), "mechanism.space: unknown value 'plain'"),
+    (with_change(LINKAGE, "mechanism.space", 2), 'mechanism.space: must be "plane", got 2'),
+    (with_change(LINKAGE, "mechanism.joint", []), "mechanism: unknown field 'joint' (did you"),
+]
+
+
+@pytest.mark.parametrize(("doc", "message"), LINKAGE_ERRORS)
+def test_linkage_validation_messages(doc, message):
+    with pytest.raises(DocumentError) as info:
+        parse_document(doc)
+    assert str(info.value).startswith(message)
+    assert info.value.field == message.split(": ")[0]
+
+
+def test_toml_writer_puts_arrays_of_tables_after_plain_keys():
+    text = dumps_toml(
+        {"format": "x", "mechanism": {"joints": [{"a": 1}, {"b": [1.0, 2.0]}], "t": 2}}
+    )
+    assert text == (
+        'format = "x"\n\n[mechanism]\nt = 2\n\n[[mechanism.joints]]\na = 1\n\n'
+        "[[mechanism.joints]]\nb = [1.0, 2.0]\n"
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Fuzzing the linkage parser: random joint lists, wrong types, missing fields, cycles
+# ---------------------------------------------------------------------------------------------
+
+joint_names = st.sampled_from(["O", "Q", "A", "B", "C", "P"])
+name_values = joint_names | st.sampled_from(["", "X", 3, None, ["A"]])
+number_values = (
+    st.floats(-10, 10, allow_nan=False)
+    | st.integers(-3, 3)
+    | st.sampled_from([0, -1, 1, math.nan, math.inf, 1e308, "1", True])
+)
+point_values = st.lists(number_values, min_size=1, max_size=3) | st.tuples(
+    st.floats(-5, 5), st.floats(-5, 5)
+).map(list)
+FIELD_VALUES = {
+    "at": point_values,
+    "pivot": name_values,
+    "p1": name_values,
+    "p2": name_values,
+    "line_point": name_values,
+    "origin": name_values,
+    "toward": name_values,
+    "length": number_values,
+    "r1": number_values,
+    "r2": number_values,
+    "r": number_values,
+    "ratio": number_values,
+    "phase": number_values,
+    "line_angle": number_values,
+    "u": number_values,
+    "v": number_values,
+    "assembly": st.sampled_from([1, -1, 0, 2, 1.0, "1"]),
+}
+
+
+@st.composite
+def joint_tables(draw):
+    kind = draw(st.sampled_from([*JOINT_SPECS, "rr", 7]))
+    entry = {"name": draw(name_values), "type": kind}
+    names = [f.name for f in JOINT_SPECS.get(kind, ())] or draw(
+        st.lists(st.sampled_from(sorted(FIELD_VALUES)), max_size=3)
+    )
+    for field_name in names:
+        if draw(st.integers(0, 9)) == 0:
+            continue  # a missing field
+        entry[field_name] = draw(FIELD_VALUES[field_name])
+    if draw(st.integers(0, 9)) == 0:
+        entry[draw(st.sampled_from(sorted(FIELD_VALUES) + ["zzz"]))] = draw(json_like)
+    if draw(st.integers(0, 19)) == 0:
+        del entry[draw(st.sampled_from(["name", "type"]))]
+    return entry
+
+
+@st.composite
+def linkage_documents(draw):
+    if draw(st.booleans()):
+        joints = draw(st.lists(joint_tables(), max_size=7))
+    else:
+        # A valid leg, shuffled (forward references and cycles) and a little damaged.
+        joints = copy.deepcopy(draw(st.sampled_from(LEG_JOINTS)))
+        if draw(st.booleans()):
+            joints = draw(st.permutations(joints))
+        for _ in range(draw(st.integers(0, 2))):
+            i = draw(st.integers(0, len(joints) - 1))
+            key = draw(st.sampled_from(sorted(joints[i])))
+            joints[i][key] = draw(FIELD_VALUES.get(key, name_values))
+    mech = {"family": "linkage", "joints": joints}
+    if draw(st.booleans()):
+        mech["traced"] = draw(st.lists(name_values, max_size=3) | json_like)
+    if draw(st.integers(0, 4)) == 0:
+        mech["space"] = draw(st.sampled_from(["plane", "sphere", "", 1]))
+    return {"format": "linkwright/1", "mechanism": mech}
+
+
+LEG_JOINTS = [
+    tomllib.loads((EXAMPLES / f"{name}.toml").read_text())["mechanism"]["joints"]
+    for name in ("jansen-leg", "klann-leg")
+] + [LINKAGE["mechanism"]["joints"]]
+
+
+@settings(max_examples=400, deadline=None)
+@given(linkage_documents())
+def test_fuzz_linkage_documents_only_raise_document_error(doc):
+    try:
+        result = parse_document(doc)
+    except DocumentError as exc:
+        assert str(exc).startswith("mechanism")
+    else:
+        assert isinstance(result.mechanism, Linkage)
+        assert parse_document(document_to_dict(result)) == result
+        # From the mechanism (radians) back to degrees an angle may move by an ulp or two.
+        again = parse_document(mechanism_to_dict(result.mechanism))
+        assert _close(again.raw["mechanism"], result.raw["mechanism"])
+
+
+def _close(a, b) -> bool:
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, float) or isinstance(b, float):
+        return math.isclose(a, b, rel_tol=1e-13, abs_tol=1e-300)
+    return a == b

@@ -205,10 +205,28 @@ def _own_signs(mech: Mechanism) -> tuple[int, ...]:
     return tuple(int(np.asarray(params[d.branch])) for d in mech.plan.dyads)
 
 
+def _structure(mech: Mechanism) -> Any:
+    """The mechanism's plan as a structure (its joints and links), whatever drives it.
+
+    A Stephenson III driven at its output has no construction plan to evaluate, but its family's
+    plan still says which joints are ground pivots.
+    """
+    from linkwright.mechanisms.sixbar import NoConstructionPlan
+
+    try:
+        return mech.plan
+    except NoConstructionPlan:
+        return type(mech).plan
+
+
+def _output_driven(mech: Mechanism) -> bool:
+    return getattr(mech, "input", "crank") == "output"
+
+
 def _ground_joints(mech: Mechanism) -> tuple[str, ...]:
     from linkwright.engine import Fixed
 
-    fixed = {s.name for s in mech.plan.steps if isinstance(s, Fixed)}
+    fixed = {s.name for s in _structure(mech).steps if isinstance(s, Fixed)}
     return tuple(j for j in mech.reported_joints if j in fixed)
 
 
@@ -338,6 +356,8 @@ def solve_document(
     mech = doc.mechanism
     theta = np.radians(np.asarray(degrees, dtype=float))
     order = 2 if derivatives else 0
+    if _output_driven(mech):
+        return _solve_triad(doc, degrees, theta, derivatives)
     if all_configurations:
         motions = configurations(mech, theta, order=order)
     else:
@@ -362,6 +382,48 @@ def solve_document(
             sample["reason"] = unassembled_reason(mech, float(theta[i]))
         samples.append(sample)
     return {"family": doc.family, "samples": samples}
+
+
+def _solve_triad(
+    doc: Document, degrees: Sequence[float], theta: Any, derivatives: bool
+) -> dict[str, Any]:
+    """Every real configuration of a linkage whose input leaves a triad (all of them: there is
+    no assembly sign to choose one by), each verified against every constraint."""
+    import numpy as np
+
+    from linkwright.mechanisms import solve_all
+
+    if derivatives:
+        raise CliError(
+            "--derivatives: not available yet for a linkage driven so that a triad remains "
+            f'({doc.family} with input = "output"); positions are'
+        )
+    found = solve_all(doc.mechanism, theta)
+    joints = doc.mechanism.reported_joints
+    samples = []
+    for i, deg in enumerate(degrees):
+        entries = []
+        for k in range(found.valid.shape[-1]):
+            if not bool(found.valid[i, k]):
+                continue
+            entries.append(
+                {
+                    "assembly": [int(found.assembly[i, k]), int(found.assembly2[i, k])],
+                    "residual": float(found.residual[i, k]),
+                    "joints": {j: _xy(found.positions[j][i, k]) for j in joints},
+                }
+            )
+        sample: dict[str, Any] = {"input_deg": float(deg), "configurations": entries}
+        if not entries:
+            sample["reason"] = "no real configuration at this input (the triad cannot close)"
+        samples.append(sample)
+    count = np.asarray(found.count)
+    return {
+        "family": doc.family,
+        "input": "output",
+        "max_configurations": int(count.max()) if count.size else 0,
+        "samples": samples,
+    }
 
 
 def _solve_text(doc: Document, result: Mapping[str, Any], derivatives: bool) -> str:
@@ -407,7 +469,7 @@ def _ground_xy(mech: Mechanism, joint: str) -> list[float] | None:
 
     from linkwright.engine import Fixed
 
-    step = mech.plan.step(joint)
+    step = _structure(mech).step(joint)
     if not isinstance(step, Fixed):
         return None
     return _xy(np.asarray(mech.params()[step.at], dtype=float))
@@ -611,6 +673,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     every expected failure (bad file, bad document, bad option) exits with status 2.
     """
     from linkwright.io.documents import DocumentError
+    from linkwright.mechanisms.sixbar import NoConstructionPlan
 
     # `linkwright` alone asks for the help, which is not an error.
     args = list(sys.argv[1:] if argv is None else argv) or ["--help"]
@@ -619,7 +682,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = command.main(args=args, prog_name="linkwright", standalone_mode=False)
     except click_exceptions.ClickException as exc:
         return _fail(exc.format_message())
-    except (CliError, DocumentError) as exc:
+    except (CliError, DocumentError, NoConstructionPlan) as exc:
         return _fail(str(exc))
     except typer.Abort:
         return _fail("aborted", 1)

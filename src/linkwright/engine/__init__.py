@@ -3,6 +3,7 @@
 from linkwright.engine.circuits import InputArcs, input_arcs, input_turns, trace
 from linkwright.engine.evaluate import Motion, evaluate
 from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, Rigid, Trammel
+from linkwright.engine.triad import TriadPoses, sweep_roots, triad_poses, triad_rates
 
 __all__ = [
     "Crank",
@@ -14,8 +15,12 @@ __all__ = [
     "Plan",
     "Rigid",
     "Trammel",
+    "TriadPoses",
     "evaluate",
     "input_arcs",
     "input_turns",
+    "sweep_roots",
     "trace",
+    "triad_poses",
+    "triad_rates",
 ]

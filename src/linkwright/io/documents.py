@@ -3,7 +3,9 @@
 A document speaks degrees; the mechanism objects it builds speak radians. Every field a family
 accepts is declared once, in :data:`FAMILY_SPECS`, as a *kind* (point, length, angle in degrees,
 sign, coupler point, slider line); validation, defaults, construction and the reverse conversion
-all read that one table, so a new family is a new row.
+all read that one table, so a new family is a new row. The composed family ``linkage`` is one
+row too: its ``joints`` field is a list of joint tables, each read through the same kinds from
+the per-type table :data:`JOINT_SPECS`.
 
 Example document (TOML)::
 
@@ -19,6 +21,47 @@ Example document (TOML)::
     rocker = 6.02
     point = { u = 2.5, v = 1.5 }
     assembly = 1
+
+A composed linkage (a four-bar written joint by joint, tracing its coupler point P)::
+
+    format = "linkwright/1"
+
+    [mechanism]
+    family = "linkage"
+    space = "plane"
+    traced = ["P"]
+
+    [[mechanism.joints]]
+    name = "A0"
+    type = "fixed"
+    at = [0.0, 0.0]
+
+    [[mechanism.joints]]
+    name = "B0"
+    type = "fixed"
+    at = [3.5, 0.0]
+
+    [[mechanism.joints]]
+    name = "A"
+    type = "crank"
+    pivot = "A0"
+    length = 1.0
+
+    [[mechanism.joints]]
+    name = "B"
+    type = "rrr"
+    p1 = "A"
+    r1 = 5.0
+    p2 = "B0"
+    r2 = 6.02
+
+    [[mechanism.joints]]
+    name = "P"
+    type = "rigid"
+    origin = "A"
+    toward = "B"
+    u = 2.5
+    v = 1.5
 """
 
 from __future__ import annotations
@@ -44,6 +87,8 @@ if TYPE_CHECKING:
 __all__ = [
     "FAMILY_SPECS",
     "FORMAT",
+    "JOINT_SPECS",
+    "KINDS",
     "Document",
     "DocumentError",
     "FamilySpec",
@@ -185,6 +230,55 @@ def _parse_line(value: Any, path: str) -> dict[str, Any]:
     }
 
 
+def _parse_signed(value: Any, path: str) -> float:
+    return _number(value, path, "a number")
+
+
+def _parse_ratio(value: Any, path: str) -> float:
+    x = _number(value, path, "a nonzero number")
+    if x == 0:
+        raise DocumentError(
+            path, f"must be a nonzero number, got {_show(value)} (a ratio of 0 does not turn)"
+        )
+    return x
+
+
+def _parse_joint_name(value: Any, path: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise DocumentError(path, f"must be a joint name (a non-empty string), got {_show(value)}")
+    return _text(value, path)
+
+
+def _parse_names(value: Any, path: str) -> list[str]:
+    if not isinstance(value, list | tuple):
+        raise DocumentError(path, f"must be a list of joint names, got {_show(value)}")
+    if not value:
+        raise DocumentError(path, "must name at least one joint")
+    return [_parse_joint_name(v, f"{path}[{i}]") for i, v in enumerate(value)]
+
+
+def _choice(choices: tuple[str, ...], refused: Mapping[str, str] | None = None) -> Kind:
+    """A kind whose value is one of a few strings; ``refused`` explains known-but-unsupported."""
+    refused = refused or {}
+    describe = " or ".join(f'"{c}"' for c in choices)
+
+    def parse(value: Any, path: str) -> str:
+        if not isinstance(value, str):
+            raise DocumentError(path, f"must be {describe}, got {_show(value)}")
+        if value in refused:
+            raise DocumentError(path, refused[value])
+        if value not in choices:
+            raise DocumentError(path, _unknown("value", value, choices))
+        return value
+
+    return Kind(
+        describe,
+        parse,
+        lambda v, a: {a[0]: v},
+        lambda m, a: str(getattr(m, a[0])),
+    )
+
+
 def tidy_number(x: float, ulps: int = 4) -> float:
     """The shortest decimal within a few units in the last place of ``x``, else ``x`` itself.
 
@@ -236,12 +330,15 @@ class Kind:
     parse : (raw value, path) → canonical document value; raises :class:`DocumentError`.
     to_kwargs : (canonical value, constructor attribute names) → constructor arguments.
     from_mech : (mechanism, attribute names) → canonical document value.
+    builds : False for a field that only says how to read the document (a linkage's ``space``)
+        and passes nothing to the constructor.
     """
 
     describe: str
     parse: Callable[[Any, str], Any]
     to_kwargs: Callable[[Any, tuple[str, ...]], dict[str, Any]]
     from_mech: Callable[[Any, tuple[str, ...]], Any]
+    builds: bool = True
 
 
 KINDS: dict[str, Kind] = {
@@ -281,14 +378,68 @@ KINDS: dict[str, Kind] = {
         lambda v, a: {a[0]: tuple(v["point"]), a[1]: math.radians(v["angle"])},
         lambda m, a: {"point": _pair(m, a[0]), "angle": _deg(_scalar(m, a[1]))},
     ),
+    "number": Kind(
+        "a number",
+        _parse_signed,
+        lambda v, a: {a[0]: v},
+        lambda m, a: _scalar(m, a[0]),
+    ),
+    "ratio": Kind(
+        "a nonzero number",
+        _parse_ratio,
+        lambda v, a: {a[0]: v},
+        lambda m, a: _scalar(m, a[0]),
+    ),
+    "stephenson_input": _choice(("crank", "output")),
+    "space": Kind(
+        '"plane"',
+        _choice(
+            ("plane",),
+            {"sphere": 'spherical linkages are not supported yet (the only space is "plane")'},
+        ).parse,
+        lambda v, a: {},
+        lambda m, a: str(getattr(m, "space", "plane")),
+        builds=False,
+    ),
+    "joint": Kind(
+        "a joint name",
+        _parse_joint_name,
+        lambda v, a: {a[0]: v},
+        lambda m, a: str(getattr(m, a[0])),
+    ),
+    "names": Kind(
+        "a list of joint names",
+        _parse_names,
+        lambda v, a: {a[0]: tuple(v)},
+        lambda m, a: [str(n) for n in getattr(m, a[0])],
+    ),
+    "joints": Kind(
+        "a list of joint tables [[mechanism.joints]]",
+        lambda v, p: _parse_joints(v, p),
+        lambda v, a: {a[0]: _build_joints(v)},
+        lambda m, a: _joints_from_mech(getattr(m, a[0])),
+    ),
 }
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A default computed from the fields validated before it (in table order).
+
+    ``describe`` says what it is (for the schema's readers); ``compute`` maps the fields parsed
+    so far to the default's canonical value.
+    """
+
+    describe: str
+    compute: Callable[[dict[str, Any]], Any]
 
 
 @dataclass(frozen=True)
 class FieldSpec:
     """A family field: its document name, kind, constructor attributes and default.
 
-    ``attrs`` defaults to ``(name,)``; ``default`` of ``None`` makes the field required.
+    ``attrs`` defaults to ``(name,)``; ``default`` of ``None`` makes the field required, a
+    :class:`Derived` computes it from the fields before it.
     """
 
     name: str
@@ -303,47 +454,263 @@ class FieldSpec:
 
 @dataclass(frozen=True)
 class FamilySpec:
-    """A family's document schema: its fields and the pairs of points that must differ."""
+    """A family's document schema: its fields, the points that must differ, and other checks."""
 
     fields: tuple[FieldSpec, ...]
     distinct: tuple[tuple[str, str, str], ...] = ()
     """(field, other field, why) for points that may not coincide."""
+    checks: tuple[Callable[[dict[str, Any]], None], ...] = ()
+    """Rules across fields, run on the validated fields; each raises :class:`DocumentError`."""
 
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(f.name for f in self.fields)
 
 
-FAMILY_SPECS: dict[str, FamilySpec] = {
-    "fourbar": FamilySpec(
+# The four-bar's fields, shared by every six-bar (each starts from the very same four-bar).
+_FOURBAR_FIELDS = (
+    FieldSpec("A0", "point"),
+    FieldSpec("B0", "point"),
+    FieldSpec("crank", "length"),
+    FieldSpec("coupler", "length"),
+    FieldSpec("rocker", "length"),
+)
+_FRAME = (("B0", "A0", "the frame A0B0 must have a positive length"),)
+_POINT = FieldSpec("point", "uv", ("u", "v"), {"u": 0.0, "v": 0.0})
+_ASSEMBLY = FieldSpec("assembly", "sign", default=1)
+
+
+def _sixbar(*, second: FieldSpec, stephenson3: bool = False) -> FamilySpec:
+    """A six-bar's schema: the four-bar, C, then E or D0, the second dyad and the point.
+
+    C and E are required: where a dyad attaches decides the topology, and no value is neutral.
+    """
+    tail = (FieldSpec("input", "stephenson_input", default="crank"),) if stephenson3 else ()
+    return FamilySpec(
         fields=(
-            FieldSpec("A0", "point"),
-            FieldSpec("B0", "point"),
-            FieldSpec("crank", "length"),
-            FieldSpec("coupler", "length"),
-            FieldSpec("rocker", "length"),
-            FieldSpec("point", "uv", ("u", "v"), {"u": 0.0, "v": 0.0}),
-            FieldSpec("assembly", "sign", default=1),
+            *_FOURBAR_FIELDS,
+            FieldSpec("C", "uv", ("u1", "v1")),
+            second,
+            FieldSpec("link1", "length"),
+            FieldSpec("link2", "length"),
+            _POINT,
+            _ASSEMBLY,
+            FieldSpec("assembly2", "sign", default=1),
+            *tail,
         ),
-        distinct=(("B0", "A0", "the frame A0B0 must have a positive length"),),
-    ),
+        distinct=_FRAME,
+    )
+
+
+_E = FieldSpec("E", "uv", ("u2", "v2"))
+_D0 = FieldSpec("D0", "point")
+
+
+def _doubleslider_lines(m: dict[str, Any]) -> None:
+    # The same bound as the DoubleSlider constructor's (|sin α| ≤ 1e-12), so that no alpha the
+    # document accepts is refused by the class, and the error names the document's field.
+    if abs(math.sin(math.radians(m["alpha"]))) <= 1e-12:
+        raise DocumentError(
+            "mechanism.alpha",
+            f"must not be a multiple of 180 degrees, got {_show(m['alpha'])} "
+            "(the slider lines would be parallel)",
+        )
+    if m["p"] + m["q"] == 0:
+        raise DocumentError(
+            "mechanism.q", "p + q must not be 0 (the sliders R and Q would coincide)"
+        )
+
+
+def _linkage_traced(m: dict[str, Any]) -> None:
+    names = {j["name"] for j in m["joints"]}
+    for i, name in enumerate(m["traced"]):
+        if name not in names:
+            raise DocumentError(
+                f"mechanism.traced[{i}]",
+                _unknown("joint", name, tuple(j["name"] for j in m["joints"])),
+            )
+        if name in m["traced"][:i]:
+            raise DocumentError(f"mechanism.traced[{i}]", f"joint {name!r} is listed twice")
+
+
+FAMILY_SPECS: dict[str, FamilySpec] = {
+    "fourbar": FamilySpec(fields=(*_FOURBAR_FIELDS, _POINT, _ASSEMBLY), distinct=_FRAME),
     "slidercrank": FamilySpec(
         fields=(
             FieldSpec("A0", "point"),
             FieldSpec("crank", "length"),
             FieldSpec("rod", "length"),
             FieldSpec("line", "line", ("line_point", "line_angle")),
-            FieldSpec("point", "uv", ("u", "v"), {"u": 0.0, "v": 0.0}),
-            FieldSpec("assembly", "sign", default=1),
+            _POINT,
+            _ASSEMBLY,
         ),
     ),
+    # A0 and B0 may coincide: two cranks on one axis still make a five-bar.
+    "geared-fivebar": FamilySpec(
+        fields=(
+            FieldSpec("A0", "point"),
+            FieldSpec("B0", "point"),
+            FieldSpec("crank1", "length"),
+            FieldSpec("crank2", "length"),
+            FieldSpec("link1", "length"),
+            FieldSpec("link2", "length"),
+            FieldSpec("phase1", "angle_deg", default=0.0),
+            FieldSpec("phase2", "angle_deg", default=0.0),
+            FieldSpec("ratio", "ratio", default=-1.0),
+            _POINT,
+            _ASSEMBLY,
+        ),
+    ),
+    "doubleslider": FamilySpec(
+        fields=(
+            FieldSpec("M", "point"),
+            FieldSpec("alpha", "angle_deg"),
+            FieldSpec("beta", "angle_deg"),
+            FieldSpec("p", "number"),
+            FieldSpec("q", "number"),
+            FieldSpec("h", "number", default=0.0),
+        ),
+        checks=(_doubleslider_lines,),
+    ),
+    "watt1": _sixbar(second=_E),
+    "watt2": _sixbar(second=_D0),
+    "stephenson1": _sixbar(second=_E),
+    "stephenson3": _sixbar(second=_D0, stephenson3=True),
+    "linkage": FamilySpec(
+        fields=(
+            FieldSpec("space", "space", default="plane"),
+            FieldSpec("joints", "joints"),
+            FieldSpec(
+                "traced",
+                "names",
+                default=Derived(
+                    "the last joint",
+                    lambda m: [m["joints"][-1]["name"]] if m["joints"] else [],
+                ),
+            ),
+        ),
+        checks=(_linkage_traced,),
+    ),
 }
+
+JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
+    "fixed": (FieldSpec("at", "point"),),
+    "crank": (
+        FieldSpec("pivot", "joint"),
+        FieldSpec("length", "length"),
+        FieldSpec("ratio", "ratio", default=1.0),
+        FieldSpec("phase", "angle_deg", default=0.0),
+    ),
+    "rrr": (
+        FieldSpec("p1", "joint"),
+        FieldSpec("r1", "length"),
+        FieldSpec("p2", "joint"),
+        FieldSpec("r2", "length"),
+        FieldSpec("assembly", "sign", default=1),
+    ),
+    "rrp": (
+        FieldSpec("p1", "joint"),
+        FieldSpec("r", "length"),
+        FieldSpec("line_point", "joint"),
+        FieldSpec("line_angle", "angle_deg"),
+        FieldSpec("assembly", "sign", default=1),
+    ),
+    "rigid": (
+        FieldSpec("origin", "joint"),
+        FieldSpec("toward", "joint"),
+        FieldSpec("u", "number", default=0.0),
+        FieldSpec("v", "number", default=0.0),
+    ),
+}
+"""A ``linkage`` joint's fields by its ``type`` (besides ``name`` and ``type``), in document
+order; the names are those of the joint spec classes of :mod:`linkwright.mechanisms.linkage`,
+and angles are degrees here as everywhere in a document."""
+
+
+def _parse_fields(
+    table: Mapping[str, Any], specs: tuple[FieldSpec, ...], path: str, out: dict[str, Any]
+) -> dict[str, Any]:
+    """Parse ``specs`` from ``table`` into ``out`` (defaults filled in); paths under ``path``."""
+    for f in specs:
+        where = f"{path}.{f.name}"
+        kind = KINDS[f.kind]
+        if f.name in table:
+            out[f.name] = kind.parse(table[f.name], where)
+        elif f.default is None:
+            raise DocumentError(where, f"missing required field ({kind.describe})")
+        elif isinstance(f.default, Derived):
+            out[f.name] = f.default.compute(out)
+        else:
+            out[f.name] = copy.deepcopy(f.default)
+    return out
+
+
+def _parse_joints(value: Any, path: str) -> list[dict[str, Any]]:
+    """A linkage's joint tables, each checked field by field against :data:`JOINT_SPECS`.
+
+    How the joints fit together (order, references, cycles, over-constraint) is the Linkage
+    class's to judge; :func:`_build` turns its verdict into a path here.
+    """
+    if not isinstance(value, list | tuple):
+        raise DocumentError(path, f"must be a list of joint tables, got {_show(value)}")
+    types = tuple(JOINT_SPECS)
+    out = []
+    for i, entry in enumerate(value):
+        where = f"{path}[{i}]"
+        table = _table(entry, where, "a joint table {name = .., type = .., ...}")
+        if "name" not in table:
+            raise DocumentError(f"{where}.name", "missing required field (a joint name)")
+        name = _parse_joint_name(table["name"], f"{where}.name")
+        if "type" not in table:
+            raise DocumentError(
+                f"{where}.type", f"missing required field (one of {', '.join(types)})"
+            )
+        kind = table["type"]
+        if not isinstance(kind, str):
+            raise DocumentError(f"{where}.type", f"must be a string, got {_show(kind)}")
+        if kind not in JOINT_SPECS:
+            raise DocumentError(f"{where}.type", _unknown("joint type", kind, types))
+        specs = JOINT_SPECS[kind]
+        _check_keys(table, ("name", "type", *(f.name for f in specs)), where)
+        out.append(_parse_fields(table, specs, where, {"name": name, "type": kind}))
+    return out
+
+
+def _build_joints(joints: list[dict[str, Any]]) -> tuple[Any, ...]:
+    from linkwright.mechanisms.linkage import JOINT_TYPES
+
+    built = []
+    for entry in joints:
+        kwargs: dict[str, Any] = {"name": entry["name"]}
+        for f in JOINT_SPECS[entry["type"]]:
+            kwargs.update(KINDS[f.kind].to_kwargs(entry[f.name], f.targets))
+        built.append(JOINT_TYPES[entry["type"]](**kwargs))
+    return tuple(built)
+
+
+def _joints_from_mech(joints: Any) -> list[dict[str, Any]]:
+    out = []
+    for i, joint in enumerate(joints):
+        entry: dict[str, Any] = {"name": joint.name, "type": joint.type}
+        for f in JOINT_SPECS[joint.type]:
+            try:
+                entry[f.name] = KINDS[f.kind].from_mech(joint, f.targets)
+            except DocumentError as exc:
+                raise DocumentError(f"joints[{i}].{f.name}", exc.problem) from None
+        out.append(entry)
+    return out
 
 
 def _mechanism_class(family: str) -> type[Mechanism]:
     from linkwright.mechanisms import FAMILIES
 
-    return FAMILIES[family]
+    try:
+        return FAMILIES[family]
+    except KeyError:
+        # A schema can land before its class: the document is valid, this build cannot run it.
+        raise DocumentError(
+            "mechanism.family", f"family {family!r} is not available in this version"
+        ) from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -460,19 +827,12 @@ def _validate_mechanism(value: Any) -> dict[str, Any]:
         raise DocumentError("mechanism.family", _unknown("family", family, known))
     spec = FAMILY_SPECS[family]
     _check_keys(mech, ("family", *spec.names), "mechanism")
-    out: dict[str, Any] = {"family": family}
-    for f in spec.fields:
-        path = f"mechanism.{f.name}"
-        kind = KINDS[f.kind]
-        if f.name in mech:
-            out[f.name] = kind.parse(mech[f.name], path)
-        elif f.default is None:
-            raise DocumentError(path, f"missing required field ({kind.describe})")
-        else:
-            out[f.name] = copy.deepcopy(f.default)
+    out = _parse_fields(mech, spec.fields, "mechanism", {"family": family})
     for name, other, why in spec.distinct:
         if out[name] == out[other]:
             raise DocumentError(f"mechanism.{name}", f"coincides with mechanism.{other} ({why})")
+    for check in spec.checks:
+        check(out)
     return out
 
 
@@ -483,12 +843,21 @@ def _build(mech: Mapping[str, Any]) -> Mechanism:
     kwargs: dict[str, Any] = {}
     for f in FAMILY_SPECS[family].fields:
         kwargs.update(KINDS[f.kind].to_kwargs(mech[f.name], f.targets))
+    cls = _mechanism_class(family)
     try:
-        return _mechanism_class(family)(**kwargs)
+        return cls(**kwargs)
     except InvalidMechanism as exc:
-        # The checks above should leave nothing for the constructor to refuse; if they ever do,
-        # its message (which names the constructor field) still reaches the user as a document
-        # error.
+        # A composed linkage's structure (order, references, over-constraint) is judged by the
+        # Linkage class alone; its error says which joint, which becomes the document path.
+        index = getattr(exc, "index", None)
+        if index is not None:
+            raise DocumentError(f"mechanism.joints[{index}]", str(exc)) from None
+        if family == "linkage":
+            where = "traced" if getattr(exc, "field", None) == "traced" else "joints"
+            raise DocumentError(f"mechanism.{where}", str(exc)) from None
+        # For the other families the checks above should leave nothing for the constructor to
+        # refuse; if they ever do, its message (which names the constructor field) still
+        # reaches the user as a document error.
         raise DocumentError("mechanism", str(exc)) from None
 
 
@@ -527,7 +896,9 @@ def mechanism_to_dict(mech: Mechanism, title: str | None = None) -> dict[str, An
         try:
             body[f.name] = KINDS[f.kind].from_mech(mech, f.targets)
         except DocumentError as exc:
-            raise DocumentError(f"mechanism.{f.name}", exc.problem) from None
+            # A list field's kind names the item at fault ("joints[2].r1"); keep that path.
+            inner = exc.field if exc.field.startswith(f"{f.name}[") else f.name
+            raise DocumentError(f"mechanism.{inner}", exc.problem) from None
     out: dict[str, Any] = {"format": FORMAT}
     if title is not None:
         out["title"] = title
@@ -661,8 +1032,9 @@ def _atomic_write(path: Path, payload: bytes) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# TOML writing: documents are a few scalars and one table of numbers, points and inline tables,
-# so a small writer covers them and keeps points and (u, v) pairs on one line each.
+# TOML writing: documents are a few scalars and one table of numbers, points and inline tables
+# (and, for a composed linkage, an array of joint tables), so a small writer covers them and
+# keeps points and (u, v) pairs on one line each.
 # --------------------------------------------------------------------------------------------
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
@@ -712,14 +1084,28 @@ def _toml_value(value: Any) -> str:
     raise TypeError(f"cannot write {type(value).__name__} as TOML")
 
 
+def _is_table_list(value: Any) -> bool:
+    return isinstance(value, list) and bool(value) and all(isinstance(v, Mapping) for v in value)
+
+
 def dumps_toml(data: Mapping[str, Any]) -> str:
     """TOML text for a document mapping: scalars first, then one ``[table]`` per mapping.
+
+    Inside a table, a non-empty list of mappings is written last, as an array of tables
+    (``[[table.key]]``, one per item): a linkage's joints read one joint per block.
 
     >>> print(dumps_toml({"format": "linkwright/1", "mechanism": {"A0": [0.0, 1.0]}}))
     format = "linkwright/1"
     <BLANKLINE>
     [mechanism]
     A0 = [0.0, 1.0]
+    <BLANKLINE>
+    >>> print(dumps_toml({"mechanism": {"family": "linkage", "joints": [{"name": "O"}]}}))
+    [mechanism]
+    family = "linkage"
+    <BLANKLINE>
+    [[mechanism.joints]]
+    name = "O"
     <BLANKLINE>
     """
     lines = [
@@ -728,8 +1114,17 @@ def dumps_toml(data: Mapping[str, Any]) -> str:
     for key, table in data.items():
         if isinstance(table, Mapping):
             lines += ["", f"[{_toml_key(key)}]"]
-            lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in table.items()]
-    return "\n".join(lines) + "\n"
+            lines += [
+                f"{_toml_key(k)} = {_toml_value(v)}"
+                for k, v in table.items()
+                if not _is_table_list(v)
+            ]
+            for k, items in table.items():
+                if _is_table_list(items):
+                    for item in items:
+                        lines += ["", f"[[{_toml_key(key)}.{_toml_key(k)}]]"]
+                        lines += [f"{_toml_key(n)} = {_toml_value(v)}" for n, v in item.items()]
+    return "\n".join(lines).lstrip("\n") + "\n"
 
 
 # --------------------------------------------------------------------------------------------

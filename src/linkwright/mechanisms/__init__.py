@@ -1,5 +1,6 @@
 """Named mechanism families: thin constructors over engine plans."""
 
+from linkwright.mechanisms.allconfigs import AllConfigurations, solve_all
 from linkwright.mechanisms.base import (
     InvalidMechanism,
     Mechanism,
@@ -8,22 +9,56 @@ from linkwright.mechanisms.base import (
     input_range,
     solve,
 )
+from linkwright.mechanisms.linkage import (
+    CrankJoint,
+    DyadJoint,
+    FixedJoint,
+    InvalidLinkage,
+    Linkage,
+    RigidJoint,
+    SliderJoint,
+)
 from linkwright.mechanisms.planar import DoubleSlider, FourBar, GearedFiveBar, SliderCrank
+from linkwright.mechanisms.sixbar import Stephenson1, Stephenson3, Watt1, Watt2
 
 FAMILIES: dict[str, type[Mechanism]] = {
-    cls.family: cls for cls in (FourBar, SliderCrank, GearedFiveBar, DoubleSlider)
+    cls.family: cls
+    for cls in (
+        FourBar,
+        SliderCrank,
+        GearedFiveBar,
+        DoubleSlider,
+        Watt1,
+        Watt2,
+        Stephenson1,
+        Stephenson3,
+        Linkage,
+    )
 }
 
 __all__ = [
     "FAMILIES",
+    "AllConfigurations",
+    "CrankJoint",
     "DoubleSlider",
+    "DyadJoint",
+    "FixedJoint",
     "FourBar",
     "GearedFiveBar",
+    "InvalidLinkage",
     "InvalidMechanism",
+    "Linkage",
     "Mechanism",
+    "RigidJoint",
     "SliderCrank",
+    "SliderJoint",
+    "Stephenson1",
+    "Stephenson3",
+    "Watt1",
+    "Watt2",
     "circuit",
     "configurations",
     "input_range",
     "solve",
+    "solve_all",
 ]

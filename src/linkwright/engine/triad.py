@@ -1,0 +1,1076 @@
+"""The Assur group of class III (the "triad"): every real pose, by a polynomial and by a sweep.
+
+A triad is a rigid ternary body carrying three joints J1, J2, J3, each tied by a binary link of
+length ``L_k`` to a known point ``K_k`` (a ground pivot, or a joint already placed). It is the
+smallest group that a construction plan cannot build joint by joint: no joint is fixed by two
+known ones, so the three loops close together. It appears in a Stephenson-III six-bar driven at
+its output side, and in a Stephenson-II six-bar driven at a link that leaves its ternary
+coupler held by three binaries.
+
+Two independent solvers live here:
+
+* :func:`triad_poses` eliminates the body's position and reduces the problem to one polynomial
+  of degree 6 in ``z = e^{iφ}`` (φ the body's rotation), solved by eigenvalues of companion
+  matrices for a whole batch at once; every root is rebuilt, polished by Newton's method on the
+  original three equations, and kept only if it satisfies all three.
+* :func:`sweep_roots` (with :func:`triad_poses_sweep` on top) needs no polynomial: one angle
+  parametrises a one-degree-of-freedom chain, circle–circle intersections place the rest on both
+  branches, and the roots of the last constraint are bracketed on a grid and bisected to the last
+  bit. It is slower and serves as the cross-check (and for linkages with no polynomial form).
+
+:func:`triad_rates` gives the joints' first and second derivatives from the differentiated
+constraints, as the construction-plan steps do for dyads.
+
+Conventions are the engine's: arrays broadcast over a leading batch shape, positions have a
+trailing axis of 2, and a result is NaN exactly where it does not exist.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from linkwright.engine.plan import ASSEMBLY_TOL
+
+__all__ = [
+    "MAX_POSES",
+    "SweptRoots",
+    "TriadPoses",
+    "TriadRates",
+    "circle_intersection",
+    "sweep_roots",
+    "triad_poses",
+    "triad_poses_sweep",
+    "triad_rates",
+]
+
+Array = NDArray[np.float64]
+
+MAX_POSES = 6
+"""A triad has at most six real poses (the degree of its polynomial)."""
+
+# A pose is kept when every link misses its length by less than this, relative to the triad's
+# size: the engine's promise (DESIGN.md) for every solved position. It is also what tells the
+# real roots of the polynomial from the complex ones that happen to lie near the unit circle.
+RESIDUAL_TOL = 1e-10
+# Roots of the polynomial within this distance of the unit circle are tried as real poses. A real
+# double root (a pose at a singular position) splits under rounding into two roots about
+# sqrt(eps) off the circle, so the band must be far wider than that; the residual test above,
+# after polishing, is what decides.
+ROOT_BAND = 1e-3
+# Newton steps on the full three-equation system after the polynomial: its roots are accurate to
+# about eps·condition, so two quadratically convergent steps reach rounding and a third is margin.
+NEWTON_STEPS = 3
+# Two poses closer than this (largest joint distance relative to the triad's size) are one pose:
+# the two roots of a double root polish towards the same place, and only near-singular triads
+# have genuinely distinct poses this close.
+DEDUP_TOL = 1e-7
+# Triads solved per chunk of a large batch (about 30 MB of work arrays each).
+CHUNK = 4096
+# The 3×3 derivative system is singular below this relative determinant (a pose where the triad
+# gains mobility); derivatives there are reported as NaN rather than as huge wrong numbers.
+SINGULAR_DET = 1e-8
+
+
+@dataclass(frozen=True)
+class TriadPoses:
+    """Every real pose of a batch of triads.
+
+    Attributes
+    ----------
+    joints : ``(..., 6, 3, 2)``, world positions of J1, J2, J3 for each pose; the real poses
+        come first, sorted by ``angle``, and the padding after them is NaN.
+    angle : ``(..., 6)``, the body's rotation φ in (−π, π] (the angle that turns the body's own
+        frame into the world frame), NaN in the padding.
+    count : ``(...,)``, the number of real poses (0 to 6).
+    residual : ``(..., 6)``, the largest ``|distance − length|`` over the three links, divided by
+        the triad's size, NaN in the padding.
+    """
+
+    joints: Array
+    angle: Array
+    count: NDArray[np.int_]
+    residual: Array
+
+    @property
+    def valid(self) -> NDArray[np.bool_]:
+        """``(..., 6)``: which slots hold a real pose."""
+        return np.arange(MAX_POSES) < self.count[..., None]
+
+
+@dataclass(frozen=True)
+class TriadRates:
+    """First and second derivatives of a triad's joints with respect to the input.
+
+    Attributes
+    ----------
+    vel, acc : ``(..., 3, 2)``, velocity and acceleration of J1, J2, J3.
+    omega, alpha : ``(...,)``, angular velocity and acceleration of the body.
+    regular : ``(...,)``, the 3×3 system is regular; everything above is NaN where it is not.
+    """
+
+    vel: Array
+    acc: Array
+    omega: Array
+    alpha: Array
+    regular: NDArray[np.bool_]
+
+
+# ----------------------------------------------------------------------------------------------
+# Small batched helpers
+# ----------------------------------------------------------------------------------------------
+
+
+def _cross(a: Array, b: Array) -> Array:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def _dot(a: Array, b: Array) -> Array:
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
+
+
+def _perp(a: Array) -> Array:
+    return np.stack((-a[..., 1], a[..., 0]), axis=-1)
+
+
+def _norm(a: Array) -> Array:
+    return np.hypot(a[..., 0], a[..., 1])
+
+
+def _rotate(c: Array, s: Array, vec: Array) -> Array:
+    """``vec`` turned by the angle whose cosine and sine are ``c`` and ``s``."""
+    return np.stack((c * vec[..., 0] - s * vec[..., 1], s * vec[..., 0] + c * vec[..., 1]), axis=-1)
+
+
+def _solve3(m: Array, r: Array) -> tuple[Array, Array]:
+    """Solve ``m · x = r`` (3×3, batched) by Cramer's rule; returns ``(x, det)``.
+
+    ``x`` is inf/NaN where ``det`` is 0: callers mask those, as :func:`plane.solve_2x2_rows`.
+    """
+    c0, c1, c2 = m[..., :, 0], m[..., :, 1], m[..., :, 2]
+
+    def det3(a: Array, b: Array, c: Array) -> Array:
+        return (
+            a[..., 0] * (b[..., 1] * c[..., 2] - b[..., 2] * c[..., 1])
+            - b[..., 0] * (a[..., 1] * c[..., 2] - a[..., 2] * c[..., 1])
+            + c[..., 0] * (a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1])
+        )
+
+    det = det3(c0, c1, c2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.stack((det3(r, c1, c2), det3(c0, r, c2), det3(c0, c1, r)), axis=-1) / det[..., None]
+    return x, det
+
+
+def _conv(a: Array, b: Array) -> Array:
+    """Product of two polynomials given by coefficient arrays (ascending powers, last axis)."""
+    n, m = a.shape[-1], b.shape[-1]
+    out = np.zeros(np.broadcast_shapes(a.shape[:-1], b.shape[:-1]) + (n + m - 1,), complex)
+    for i in range(n):
+        out[..., i : i + m] += a[..., i : i + 1] * b
+    return out
+
+
+def _horner(coef: Array, z: Array) -> Array:
+    """Polynomial with ascending coefficients ``coef`` (..., n) at ``z`` (..., k)."""
+    out = np.zeros(np.broadcast_shapes(coef.shape[:-1] + (1,), z.shape), complex)
+    for i in range(coef.shape[-1] - 1, -1, -1):
+        out = out * z + coef[..., i : i + 1]
+    return out
+
+
+def _broadcast_triad(
+    anchors: ArrayLike, lengths: ArrayLike, body: ArrayLike
+) -> tuple[Array, Array, Array, tuple[int, ...]]:
+    anchors = np.asarray(anchors, dtype=float)
+    lengths = np.asarray(lengths, dtype=float)
+    body = np.asarray(body, dtype=float)
+    if anchors.shape[-2:] != (3, 2) or body.shape[-2:] != (3, 2) or lengths.shape[-1:] != (3,):
+        raise ValueError(
+            "anchors and body must have shape (..., 3, 2) and lengths (..., 3); got "
+            f"{anchors.shape}, {body.shape}, {lengths.shape}"
+        )
+    batch = np.broadcast_shapes(anchors.shape[:-2], lengths.shape[:-1], body.shape[:-2])
+    return (
+        np.broadcast_to(anchors, batch + (3, 2)),
+        np.broadcast_to(lengths, batch + (3,)),
+        np.broadcast_to(body, batch + (3, 2)),
+        batch,
+    )
+
+
+def _triad_size(anchors: Array, lengths: Array, body: Array) -> Array:
+    """The triad's size: its longest link, body side or anchor distance."""
+    pairs = ((0, 1), (0, 2), (1, 2))
+    sides = [_norm(body[..., i, :] - body[..., j, :]) for i, j in pairs]
+    spans = [_norm(anchors[..., i, :] - anchors[..., j, :]) for i, j in pairs]
+    return np.maximum.reduce([np.abs(lengths).max(axis=-1), *sides, *spans])
+
+
+def _link_residual(joints: Array, anchors: Array, lengths: Array, size: Array) -> Array:
+    """Largest ``|distance − length|`` over the three links, relative to ``size``."""
+    gap = np.abs(_norm(joints - anchors) - lengths).max(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return gap / size
+
+
+def _circle_xy(
+    p1x: Array, p1y: Array, r1: Array, p2x: Array, p2y: Array, r2: Array, sign: Array
+) -> tuple[Array, Array]:
+    """:func:`circle_intersection` on separate coordinates (the sweep's inner loop)."""
+    dx, dy = p2x - p1x, p2y - p1y
+    d2 = dx * dx + dy * dy
+    # (r1+r2)² − d² and d² − (r1−r2)², each free of cancellation near its own root (as DyadRRR).
+    with np.errstate(divide="ignore", invalid="ignore"):
+        margin = ((r1 + r2) ** 2 - d2) * (d2 - (r1 - r2) ** 2) / (4.0 * d2 * r1 * r1)
+        inv_d = 1.0 / np.sqrt(d2)
+        a = ((r1 - r2) * (r1 + r2) + d2) * (0.5 * inv_d)
+        h = sign * r1 * np.sqrt(np.clip(margin, 0.0, None))
+        ok = (margin >= -ASSEMBLY_TOL) & (d2 > 0)
+        a, h = np.where(ok, a * inv_d, np.nan), np.where(ok, h * inv_d, np.nan)
+        return p1x + a * dx - h * dy, p1y + a * dy + h * dx
+
+
+def circle_intersection(
+    p1: ArrayLike, r1: ArrayLike, p2: ArrayLike, r2: ArrayLike, branch: ArrayLike
+) -> Array:
+    """The point at ``r1`` from ``p1`` and ``r2`` from ``p2`` with the given branch, batched.
+
+    ``branch`` is the engine's dyad sign: the result P has ``sign((p2 − p1) × (P − p1)) =
+    branch``. NaN where the circles do not meet (within the engine's assembly tolerance, so an
+    exact limit position still closes) or the centres coincide.
+
+    Examples
+    --------
+    >>> circle_intersection([0.0, 0.0], 5.0, [8.0, 0.0], 5.0, 1.0)
+    array([4., 3.])
+    >>> circle_intersection([0.0, 0.0], 1.0, [8.0, 0.0], 1.0, 1.0)
+    array([nan, nan])
+    """
+    p1, p2 = np.asarray(p1, dtype=float), np.asarray(p2, dtype=float)
+    x, y = _circle_xy(
+        p1[..., 0],
+        p1[..., 1],
+        np.asarray(r1, dtype=float),
+        p2[..., 0],
+        p2[..., 1],
+        np.asarray(r2, dtype=float),
+        np.asarray(branch, dtype=float),
+    )
+    return np.stack((x, y), axis=-1)
+
+
+# ----------------------------------------------------------------------------------------------
+# The polynomial solver
+# ----------------------------------------------------------------------------------------------
+
+
+def _triad_polynomial(k: Array, l: Array, c: Array) -> tuple[Array, Array, Array]:
+    """Coefficients of the triad's polynomial and of the body position's numerator and divisor.
+
+    Inputs are normalised (``k[..., 0] = c[..., 0] = 0``, size about 1) and complex: ``k`` the
+    anchors, ``c`` the body joints, ``l`` the lengths. With ``Y = J1 − K1`` and the body turned
+    by ``z = e^{iφ}``, link k (2, 3) reads ``|Y + z c_k − k_k|² = l_k²``; subtracting link 1
+    (``Y Ȳ = l_1²``) leaves ``Ȳ w_k + Y w̄_k = 2 b_k``, linear in (Y, Ȳ), with
+    ``w_k = z c_k − k_k`` and ``b_k = β_k + Re(k̄_k c_k z)``. Treating Y and Ȳ as independent
+    (isotropic coordinates) gives ``Y = 2 num / Δ`` and ``Ȳ = −2 num* / Δ`` (num* the
+    polynomial with conjugated coefficients and reversed powers, Δ imaginary on the circle),
+    and link 1 becomes ``4 num num* + l_1² Δ² = 0``: a Laurent polynomial in z with powers
+    −3..3, real on the unit circle (``4 |num|² − 4 l_1² (w_2 × w_3)²``).
+
+    Returns ``(F, num, Δ)``: ascending coefficients for powers −3..3, −1..2 and −1..1.
+    """
+    g2, g3 = c[..., 1], c[..., 2]
+    d2, d3 = k[..., 1], k[..., 2]
+
+    def w(g: Array, d: Array) -> Array:  # powers 0..1
+        return np.stack((-d, g), axis=-1)
+
+    def wbar(g: Array, d: Array) -> Array:  # powers −1..0
+        return np.stack((np.conj(g), -np.conj(d)), axis=-1)
+
+    def b(g: Array, d: Array, lk: Array) -> Array:  # powers −1..1
+        beta = 0.5 * (lk * lk - l[..., 0] ** 2 - abs(g) ** 2 - abs(d) ** 2)
+        return np.stack((0.5 * d * np.conj(g), beta.astype(complex), 0.5 * np.conj(d) * g), axis=-1)
+
+    b2, b3 = b(g2, d2, l[..., 1]), b(g3, d3, l[..., 2])
+    num = _conv(b2, w(g3, d3)) - _conv(b3, w(g2, d2))  # powers −1..2
+    # num* is num with conjugated coefficients and reversed powers (its value on the circle is
+    # the conjugate of num's); F built from it is self-reciprocal by construction.
+    num_star = np.conj(num[..., ::-1])  # powers −2..1
+    delta = _conv(wbar(g2, d2), w(g3, d3)) - _conv(w(g2, d2), wbar(g3, d3))  # powers −1..1
+    f = 4.0 * _conv(num, num_star)  # powers −3..3
+    f[..., 1:6] += (l[..., 0] ** 2)[..., None] * _conv(delta, delta)
+    f = 0.5 * (f + np.conj(f[..., ::-1]))
+    return f, num, delta
+
+
+def _tan_half_basis() -> Array:
+    """``B[k + 3]``: ascending coefficients in t of ``(1 + it)^(3+k) (1 − it)^(3−k)``.
+
+    With ``t = tan(φ/2)``, ``e^{iφ} = (1 + it)/(1 − it)``, so ``(1 + t²)³ Σ f_k e^{ikφ}`` is
+    ``Σ f_k B_k(t)``, a polynomial of degree 6 in t.
+    """
+    plus, minus = np.array([1.0, 1j]), np.array([1.0, -1j])
+    rows = []
+    for k in range(-3, 4):
+        poly = np.ones(1, complex)
+        for _ in range(3 + k):
+            poly = np.convolve(poly, plus)
+        for _ in range(3 - k):
+            poly = np.convolve(poly, minus)
+        rows.append(poly)
+    return np.array(rows)
+
+
+_TAN_HALF = _tan_half_basis()
+# Where the rotated parametrisation's t = ∞ may sit: the one of these angles at which |F| is
+# largest. A trigonometric polynomial of degree 3 that is not zero cannot be small at 8 equally
+# spaced angles, so the degree-6 polynomial in t keeps a leading coefficient of the size of the
+# others and has no root near infinity.
+_PIVOTS = np.arange(8) * (np.pi / 4)
+
+
+def _real_angle_roots(f: Array) -> Array:
+    """The roots ``z`` of ``Σ_{k=-3..3} f_k z^k`` (``f`` ascending, self-reciprocal), batched.
+
+    The unit circle is mapped onto the real line by ``z = e^{iφ0} (1 + it)/(1 − it)``, with
+    ``φ0 + π`` the pivot where |F| is largest, and the roots in t are the eigenvalues of
+    companion matrices. Rows that are all zero or not finite give NaN. Where F has degree
+    below 3 (two anchors or two body joints coincide), the polynomial in t keeps its degree 6
+    and gains the root pair ``t = ±i``, i.e. ``z = 0`` and ``z = ∞``, far from the circle.
+    """
+    scale = np.abs(f).max(axis=-1)
+    ok = np.isfinite(scale) & (scale > 0)
+    f = np.where(ok[..., None], f, 1.0)
+    at_pivots = (f[..., None, :] * np.exp(1j * np.outer(_PIVOTS, np.arange(-3, 4)))).sum(-1)
+    phi0 = _PIVOTS[np.abs(at_pivots).argmax(axis=-1)] - np.pi
+    turned = f * np.exp(1j * np.arange(-3, 4) * phi0[..., None])
+    poly = (turned @ _TAN_HALF).real  # imaginary part is rounding: F is real on the circle
+    comp = np.zeros(f.shape[:-1] + (6, 6))
+    comp[..., 0, :] = -poly[..., 5::-1] / poly[..., 6:7]
+    comp[..., np.arange(1, 6), np.arange(5)] = 1.0
+    comp = np.where(ok[..., None, None], comp, 0.0)
+    t = np.linalg.eigvals(comp) if comp.size else np.zeros(f.shape[:-1] + (6,), complex)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.exp(1j * phi0)[..., None] * (1.0 + 1j * t) / (1.0 - 1j * t)
+    return np.where(ok[..., None], z, np.nan)
+
+
+def _newton(x: Array, phi: Array, k: Array, l: Array, c: Array, steps: int) -> tuple[Array, Array]:
+    """Polish poses (``x`` = J1, ``phi``) on the three link equations ``|J_k − K_k|² = l_k²``.
+
+    Arrays: x (..., m, 2), phi (..., m); k, c (..., 1, 3, 2), l (..., 1, 3). A step is taken only
+    where the Jacobian is regular and the step finite, so a pose at a singular position keeps
+    its (already accurate) value.
+    """
+    for _ in range(steps):
+        cs, sn = np.cos(phi)[..., None], np.sin(phi)[..., None]
+        arm = _rotate(cs, sn, c)  # R c_k, (..., m, 3, 2)
+        e = x[..., None, :] + arm - k
+        r = 0.5 * (_dot(e, e) - l * l)
+        jac = np.concatenate((e, _dot(e, _perp(arm))[..., None]), axis=-1)
+        step, det = _solve3(jac, r)
+        # Coordinates are normalised (size 1), so det is relative; below 1e-14 the step would be
+        # rounding noise amplified, at a pose that is a double root and already accurate.
+        good = np.isfinite(step).all(axis=-1) & (np.abs(det) > 1e-14)
+        step = np.where(good[..., None], step, 0.0)
+        x = x - step[..., :2]
+        phi = phi - step[..., 2]
+    return x, phi
+
+
+def _line_circle(w: Array, b: Array, radius: Array) -> tuple[Array, Array]:
+    """Both points Y with ``Y·w = b`` and ``|Y| = radius`` (NaN where the line misses)."""
+    ww = _dot(w, w)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        foot = (b / ww)[..., None] * w
+        half = np.sqrt((radius * radius - b * b / ww) / ww)
+    side = half[..., None] * _perp(w)
+    return foot + side, foot - side
+
+
+def _pose_candidates(
+    roots: Array, f_num: Array, delta: Array, k: Array, l: Array, c: Array
+) -> tuple[Array, Array]:
+    """Rebuild (J1, φ) from each root: ``Y = 2 num/Δ``, and the line ∩ circle points.
+
+    Returns x (..., 18, 2) and phi (..., 18): 6 Cramer candidates, then 12 from one of the two
+    linear equations (the better conditioned) and the first link's circle. Where Δ(φ) vanishes
+    with the numerators (the two lines coincide) there are two poses at one φ, which Cramer's
+    rule cannot give and the circle can; elsewhere one of the two points is the pose again and
+    the other is discarded by the residual test (or polishes to a pose already found). Roots
+    off the band around the unit circle give NaN.
+    """
+    near = np.abs(np.abs(roots) - 1.0) < ROOT_BAND
+    phi = np.where(near, np.angle(roots), np.nan)
+    z = np.exp(1j * phi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        n_val = _horner(f_num, z) / z  # powers start at −1
+        d_val = _horner(delta, z) / z
+        y = 2.0 * n_val / d_val
+    x_cramer = np.stack((y.real, y.imag), axis=-1)
+    cs, sn = np.cos(phi)[..., None], np.sin(phi)[..., None]
+    arm = _rotate(cs, sn, c[..., None, :, :])  # (..., 6, 3, 2)
+    kk2, kk3 = k[..., None, 1, :], k[..., None, 2, :]
+    w2, w3 = arm[..., 1, :] - kk2, arm[..., 2, :] - kk3
+    lk = l[..., None, :]
+    c2, c3 = c[..., None, 1, :], c[..., None, 2, :]
+    # Y·w_k = b_k: the difference of link k's circle equation and link 1's.
+    b2 = 0.5 * (lk[..., 1] ** 2 - lk[..., 0] ** 2 - _dot(c2, c2) - _dot(kk2, kk2))
+    b3 = 0.5 * (lk[..., 2] ** 2 - lk[..., 0] ** 2 - _dot(c3, c3) - _dot(kk3, kk3))
+    b2 = b2 + _dot(kk2, arm[..., 1, :])
+    b3 = b3 + _dot(kk3, arm[..., 2, :])
+    use2 = _norm(w2) >= _norm(w3)
+    pa, pb = _line_circle(np.where(use2[..., None], w2, w3), np.where(use2, b2, b3), lk[..., 0])
+    x = np.concatenate((x_cramer, pa, pb), axis=-2)
+    return x, np.concatenate((phi, phi, phi), axis=-1)
+
+
+def _select(
+    joints: Array, angle: Array, residual: Array, size: Array, limit: int
+) -> tuple[Array, Array, Array, NDArray[np.int_]]:
+    """Keep the verified candidates, merge duplicates, sort by angle, pack into ``limit`` slots.
+
+    ``joints`` (..., m, 3, 2) and ``angle``, ``residual`` (..., m) are candidates; NaN marks
+    those already rejected. Of two candidates within ``DEDUP_TOL`` the one with the smaller
+    residual stays.
+    """
+    keep = residual < RESIDUAL_TOL
+    resid = np.where(keep, residual, np.inf)
+    joints = np.where(keep[..., None, None], joints, np.nan)  # rejected ones may hold inf
+    # Pairwise: j is a duplicate if some kept i is within tolerance and better (ties: lower i).
+    # One coordinate at a time: a (..., m, m, 3, 2) block would cost 6 times the memory.
+    diff = np.zeros(joints.shape[:-2] + joints.shape[-3:-2])
+    for j in range(3):
+        for axis in range(2):
+            coord = joints[..., j, axis]
+            diff = np.fmax(diff, np.abs(coord[..., :, None] - coord[..., None, :]))
+    diff = np.where(keep[..., :, None] & keep[..., None, :], diff, np.inf)
+    close = diff <= DEDUP_TOL * size[..., None, None]
+    m = joints.shape[-3]
+    idx = np.arange(m)
+    better = (resid[..., :, None] < resid[..., None, :]) | (
+        (resid[..., :, None] == resid[..., None, :]) & (idx[:, None] < idx[None, :])
+    )
+    dup = (close & better & keep[..., :, None]).any(axis=-2)
+    keep &= ~dup
+    order = np.argsort(np.where(keep, angle, np.inf), axis=-1, kind="stable")[..., :limit]
+    kept = np.take_along_axis(keep, order, axis=-1)
+    count = keep.sum(axis=-1).clip(max=limit)
+    joints = np.take_along_axis(joints, order[..., None, None], axis=-3)
+    joints = np.where(kept[..., None, None], joints, np.nan)
+    angle = np.where(kept, np.take_along_axis(angle, order, axis=-1), np.nan)
+    residual = np.where(kept, np.take_along_axis(residual, order, axis=-1), np.nan)
+    return joints, angle, residual, count
+
+
+def _pad(a: Array, width: int, axis: int) -> Array:
+    """Pad ``a`` with NaN along ``axis`` (negative) up to ``width`` entries."""
+    missing = width - a.shape[axis]
+    if missing <= 0:
+        return a
+    pad = [(0, 0)] * a.ndim
+    pad[axis] = (0, missing)
+    return np.pad(a, pad, constant_values=np.nan)
+
+
+def triad_poses(anchors: ArrayLike, lengths: ArrayLike, body: ArrayLike) -> TriadPoses:
+    """Every real pose of a triad (the class III Assur group), batched.
+
+    The body carries J1, J2, J3 at ``body[..., k, :]`` in its own frame; J_k is tied to the
+    point ``anchors[..., k, :]`` by a link of length ``lengths[..., k]``. Writing
+    ``J_k = J_1 + R(φ)(c_k − c_1)``, the differences of the three circle equations are linear
+    in J_1 for a given φ; substituting their solution into the first equation leaves one
+    equation in φ. In isotropic (complex) coordinates, ``z = e^{iφ}``, it is a Laurent
+    polynomial with powers −3..3, i.e. degree 6: a triad has at most 6 real poses. The
+    formulation (links as vectors in the complex plane, each with its conjugate as a separate
+    unknown) is C. W. Wampler's, "Solving the kinematics of planar mechanisms", J. Mech. Des.
+    121 (1999) 387–391; the problem is also the forward kinematics of the planar 3-RPR
+    platform, whose bound of six poses goes back to K. H. Hunt.
+
+    The roots are found in ``t = tan((φ − φ0)/2)``, the half-angle parametrisation turned by
+    φ0 so that t = ∞ lies where the polynomial is largest: φ = π, or any angle, is no special
+    case, and no root runs off to infinity. They are the eigenvalues of companion matrices (one
+    batched call). Each root near the unit circle gives φ, and J_1 follows from the linear
+    equations and also from one of them and the first circle (both points): the elimination is
+    exact except where those equations are singular (their determinant Δ(φ) vanishes with the
+    numerators), and there two poses share one φ. Three Newton steps on the three original
+    equations polish every candidate, and a pose is kept only if every link then has its
+    length to ``1e-10`` of the triad's size, which discards complex roots near the circle and
+    the spurious candidates alike. Poses closer than ``1e-7`` of the size are merged (a double
+    root, i.e. a pose at a singular position, counts once).
+
+    Parameters
+    ----------
+    anchors : ``(..., 3, 2)``, the known points K1, K2, K3.
+    lengths : ``(..., 3)``, the link lengths |K_k J_k|.
+    body : ``(..., 3, 2)``, J1, J2, J3 in the body's own frame.
+
+    Returns
+    -------
+    TriadPoses
+        Joints ``(..., 6, 3, 2)``, the body angle, the count and each pose's residual; the real
+        poses come first, sorted by the body angle, and the rest is NaN. A triad whose
+        polynomial vanishes identically (a continuum of poses: a body and anchor triangle that
+        are similar and collinear, for instance) reports no pose.
+
+    Examples
+    --------
+    Anchors on a circle of radius 2 and body joints on one of radius 1, both 120° apart, with
+    links of length √3: the body centred and turned by φ puts J_k at distance
+    ``√(4 + 1 − 4 cos φ)`` from K_k, which is √3 at φ = ±60°; there is no other pose.
+
+    >>> ring = np.array([[0.0, 1.0], [-0.75**0.5, -0.5], [0.75**0.5, -0.5]])
+    >>> poses = triad_poses(2 * ring, [3**0.5] * 3, ring)
+    >>> int(poses.count), np.degrees(poses.angle[:2]).round(9)
+    (2, array([-60.,  60.]))
+    >>> poses.joints[1].round(6) + 0.0  # φ = 60°: J_k at 150°, 270° and 30° on the unit circle
+    array([[-0.866025,  0.5     ],
+           [ 0.      , -1.      ],
+           [ 0.866025,  0.5     ]])
+    >>> bool(poses.residual[1] < 1e-15)
+    True
+
+    A triad with six real poses (found by searching integer-coordinate triads, and confirmed by
+    :func:`triad_poses_sweep`):
+
+    >>> six = triad_poses([[0, 0], [1, -10], [9, 7]], [8, 13, 14], [[0, 0], [-6, 5], [7, 1]])
+    >>> int(six.count), np.degrees(six.angle).round(3)
+    (6, array([-176.956,  -24.415,    2.871,   68.62 ,   96.304,  167.902]))
+
+    Anchors too far apart for the links give no pose:
+
+    >>> none = triad_poses(10 * ring, [1.0, 1.0, 1.0], ring)
+    >>> int(none.count), bool(np.isnan(none.joints).all())
+    (0, True)
+    """
+    anchors, lengths, body, batch = _broadcast_triad(anchors, lengths, body)
+    n = int(np.prod(batch, dtype=int))
+    flat = (anchors.reshape(n, 3, 2), lengths.reshape(n, 3), body.reshape(n, 3, 2))
+    # In chunks: each triad carries 18 candidates and their pairwise distances, so memory, not
+    # time, is what limits the size of one call.
+    parts = [_triad_poses_flat(*(a[i : i + CHUNK] for a in flat)) for i in range(0, n, CHUNK)]
+    if not parts:
+        parts = [_triad_poses_flat(*flat)]
+    joined = [np.concatenate(field) for field in zip(*parts, strict=True)]
+    joints, angle, count, residual = (a.reshape(batch + a.shape[1:]) for a in joined)
+    return TriadPoses(joints=joints, angle=angle, count=count, residual=residual)
+
+
+def _triad_poses_flat(
+    anchors: Array, lengths: Array, body: Array
+) -> tuple[Array, Array, NDArray[np.int_], Array]:
+    """:func:`triad_poses` on a flat batch: (joints, angle, count, residual)."""
+    size = _triad_size(anchors, lengths, body)
+    origin = anchors[..., :1, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = (anchors - origin) / size[..., None, None]
+        l = lengths / size[..., None]
+        c = (body - body[..., :1, :]) / size[..., None, None]
+    kz = k[..., 0] + 1j * k[..., 1]
+    cz = c[..., 0] + 1j * c[..., 1]
+    f, num, delta = _triad_polynomial(kz, l, cz)
+    roots = _real_angle_roots(f)
+    # Rebuilding, polishing and verifying run on every candidate, real or not: divisions by a
+    # vanishing Δ and overflows from a far-off root are expected there and masked by the checks.
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        x, phi = _pose_candidates(roots, num, delta, k, l, c)
+        x, phi = _newton(
+            x, phi, k[..., None, :, :], l[..., None, :], c[..., None, :, :], NEWTON_STEPS
+        )
+        phi = np.angle(np.exp(1j * phi))
+        cs, sn = np.cos(phi)[..., None], np.sin(phi)[..., None]
+        local = x[..., None, :] + _rotate(cs, sn, c[..., None, :, :])
+        joints = origin[..., None, :, :] + size[..., None, None, None] * local
+        residual = _link_residual(
+            joints, anchors[..., None, :, :], lengths[..., None, :], size[..., None]
+        )
+    residual = np.where(np.isfinite(residual), residual, np.nan)
+    joints, angle, residual, count = _select(joints, phi, residual, size, MAX_POSES)
+    return joints, angle, count, residual
+
+
+# ----------------------------------------------------------------------------------------------
+# Derivatives
+# ----------------------------------------------------------------------------------------------
+
+
+def triad_rates(
+    anchor_pos: ArrayLike,
+    anchor_vel: ArrayLike,
+    anchor_acc: ArrayLike,
+    joints: ArrayLike,
+    lengths: ArrayLike,
+) -> TriadRates:
+    """Velocities and accelerations of a triad's joints from those of its anchors.
+
+    With ``ρ_k = J_k − J_1`` and ``e_k = J_k − K_k``, the body moves as
+    ``J̇_k = V + ω ρ_k^⊥`` and ``J̈_k = A + α ρ_k^⊥ − ω² ρ_k``; differentiating
+    ``|e_k|² = L_k²`` once and twice gives, for the unknowns (V, ω) and then (A, α),
+
+    ``e_k·V + ω (ρ_k × e_k) = e_k·K̇_k`` and
+    ``e_k·A + α (ρ_k × e_k) = e_k·K̈_k − |J̇_k − K̇_k|² + ω² e_k·ρ_k``,
+
+    one 3×3 solve each (rows scaled by ``L_k``, the angular column by the body's size, so that
+    the determinant is relative). Where ``|det|`` is below 1e-8 the triad is at a singular
+    position (its links' lines meet in one point, or are parallel), and every output is NaN.
+
+    Parameters
+    ----------
+    anchor_pos, anchor_vel, anchor_acc : ``(..., 3, 2)``, the anchors K_k and their first and
+        second derivatives with respect to the input.
+    joints : ``(..., 3, 2)``, one pose (e.g. ``poses.joints``, with the anchors given an axis
+        for the poses: ``anchor_pos[..., None, :, :]``).
+    lengths : ``(..., 3)``, the link lengths.
+
+    Returns
+    -------
+    TriadRates
+        ``vel`` and ``acc`` of J1..J3 ``(..., 3, 2)``, the body's ``omega`` and ``alpha``, and
+        ``regular``.
+
+    Examples
+    --------
+    Anchors translating together at unit speed along +x carry the whole triad with them, and
+    spinning about the origin at unit rate they turn it rigidly (J at radius 1: speed 1,
+    centripetal acceleration 1):
+
+    >>> ring = np.array([[0.0, 1.0], [-0.75**0.5, -0.5], [0.75**0.5, -0.5]])
+    >>> pose = triad_poses(2 * ring, [3**0.5] * 3, ring).joints[1]
+    >>> shift = triad_rates(2 * ring, [[1.0, 0.0]] * 3, np.zeros((3, 2)), pose, [3**0.5] * 3)
+    >>> shift.vel.round(12) + 0.0, float(shift.omega.round(12) + 0.0)
+    (array([[1., 0.],
+           [1., 0.],
+           [1., 0.]]), 0.0)
+    >>> turn = 2 * ring @ [[0.0, 1.0], [-1.0, 0.0]]  # the anchors' velocities: ω × K
+    >>> spin = triad_rates(2 * ring, turn, -2 * ring, pose, [3**0.5] * 3)
+    >>> float(spin.omega.round(12)), bool(np.allclose(spin.acc, -pose))
+    (1.0, True)
+    """
+    k = np.asarray(anchor_pos, dtype=float)
+    j = np.asarray(joints, dtype=float)
+    shape = np.broadcast_shapes(k.shape, j.shape)
+    kv = np.broadcast_to(np.asarray(anchor_vel, dtype=float), shape)
+    ka = np.broadcast_to(np.asarray(anchor_acc, dtype=float), shape)
+    lengths = np.asarray(lengths, dtype=float)
+    e = j - k
+    rho = j - j[..., :1, :]
+    body = np.maximum(_norm(rho[..., 1, :]), _norm(rho[..., 2, :]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        row_scale = 1.0 / lengths  # each row is then a unit direction and a lever arm / size
+        ang_scale = 1.0 / body
+        ex, ey = e[..., 0] * row_scale, e[..., 1] * row_scale
+        m = np.stack(
+            np.broadcast_arrays(ex, ey, _cross(rho, e) * row_scale * ang_scale[..., None]), axis=-1
+        )
+        r1 = _dot(e, kv) * row_scale
+        sol1, det = _solve3(m, r1)
+        v = sol1[..., :2]
+        omega = sol1[..., 2] * ang_scale
+        vel = v[..., None, :] + omega[..., None, None] * _perp(rho)
+        rel_vel = vel - kv
+        r2 = _dot(e, ka) - _dot(rel_vel, rel_vel) + (omega**2)[..., None] * _dot(e, rho)
+        sol2, _ = _solve3(m, r2 * row_scale)
+        a = sol2[..., :2]
+        alpha = sol2[..., 2] * ang_scale
+        acc = (
+            a[..., None, :]
+            + alpha[..., None, None] * _perp(rho)
+            - (omega**2)[..., None, None] * rho
+        )
+    regular = np.abs(det) > SINGULAR_DET
+    regular &= np.isfinite(vel).all(axis=(-1, -2)) & np.isfinite(acc).all(axis=(-1, -2))
+    keep = regular[..., None, None]
+    return TriadRates(
+        vel=np.where(keep, vel, np.nan),
+        acc=np.where(keep, acc, np.nan),
+        omega=np.where(regular, omega, np.nan),
+        alpha=np.where(regular, alpha, np.nan),
+        regular=regular,
+    )
+
+
+# ----------------------------------------------------------------------------------------------
+# The sweep solver
+# ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class SweptRoots:
+    """Roots of a residual over a periodic parameter, on each branch.
+
+    Attributes
+    ----------
+    psi : ``(..., m)``, the roots in [lower, upper), sorted, NaN-padded; ``m`` is the largest
+        count in the batch.
+    branch : ``(..., m)``, the branch each root lies on (NaN in the padding).
+    count : ``(...,)``, the number of roots found.
+    """
+
+    psi: Array
+    branch: Array
+    count: NDArray[np.int_]
+
+
+ResidualFn = Callable[[Array, Array], Array]
+"""``residual_fn(psi, branch) -> residual``: shapes ``batch + (m,)``, NaN where not assembled."""
+
+
+def _bisect(same_as_lo: Callable[[Array], Array], lo: Array, hi: Array) -> tuple[Array, Array]:
+    """Halve brackets ``[lo, hi]`` until lo and hi are adjacent floating-point numbers.
+
+    ``same_as_lo(x)`` says, per bracket, whether x lies on lo's side (of a sign change, or of the
+    edge of the assembled range). 64 halvings take any bracket within [−4π, 4π] down to
+    rounding; the loop stops as soon as no bracket has a representable midpoint left.
+    """
+    for _ in range(64):
+        mid = 0.5 * (lo + hi)
+        open_ = (mid != lo) & (mid != hi)
+        if not open_.any():
+            break
+        same = same_as_lo(mid)
+        lo = np.where(open_ & same, mid, lo)
+        hi = np.where(open_ & ~same, mid, hi)
+    return lo, hi
+
+
+def _golden_min(fn: Callable[[Array], Array], lo: Array, hi: Array) -> tuple[Array, Array]:
+    """Minimise ``fn`` on each bracket by golden-section search; returns (argmin, min).
+
+    NaN counts as +inf. 48 steps shrink the bracket by 1e-10, below the sqrt(eps) to which a
+    minimum can be located at all; the minimum's *value*, which is what is used, is then exact
+    to rounding.
+    """
+    ratio = 0.5 * (np.sqrt(5.0) - 1.0)
+
+    def f(x: Array) -> Array:
+        v = fn(x)
+        return np.where(np.isnan(v), np.inf, v)
+
+    x1 = hi - ratio * (hi - lo)
+    x2 = lo + ratio * (hi - lo)
+    f1, f2 = f(x1), f(x2)
+    for _ in range(48):
+        left = f1 <= f2  # the minimum is in [lo, x2]
+        lo, hi = np.where(left, lo, x1), np.where(left, x2, hi)
+        new = np.where(left, hi - ratio * (hi - lo), lo + ratio * (hi - lo))
+        f_new = f(new)
+        x1, x2, f1, f2 = (
+            np.where(left, new, x2),
+            np.where(left, x1, new),
+            np.where(left, f_new, f2),
+            np.where(left, f1, f_new),
+        )
+    best = f1 <= f2
+    return np.where(best, x1, x2), np.where(best, f1, f2)
+
+
+def sweep_roots(
+    residual_fn: ResidualFn,
+    batch_shape: tuple[int, ...],
+    *,
+    branches: Sequence[float] = (1.0, -1.0),
+    grid: int = 512,
+    lower: float = -np.pi,
+    upper: float = np.pi,
+) -> SweptRoots:
+    """All roots of a scalar residual of one periodic parameter ψ, on each branch, batched.
+
+    The residual is sampled at ``grid`` equal steps of the period [lower, upper) for every
+    branch, and every root is bracketed and then bisected to adjacent floating-point numbers
+    (the endpoint with the smaller |residual| is reported). Brackets come from three places:
+
+    * a sign change between two neighbouring samples;
+    * a sample nearer zero than both neighbours with the same sign (a pair of roots closer than
+      a step would hide there): golden-section search finds the extremum between the
+      neighbours, and if the residual changes sign there, each side is a bracket;
+    * the edge of the assembled range (the residual turns NaN between two samples): the edge is
+      found by bisection too, and if the residual changes sign on the last piece up to it, that
+      piece is a bracket. A root next to a limit position, where the branches meet, is thus
+      found on exactly one of them.
+
+    Missed are: three or more roots within two steps, a pair within a step of an edge that the
+    extremum search does not separate, and assembled windows narrower than a step. Next to an
+    edge that is a limit position, the residual grows like the square root of ψ's distance to
+    it, so a root within about 1e-13 of it is resolved only to about 1e-8 of the residual's
+    scale. This is the cross-check and fallback, not the primary solver; choose ``grid``
+    accordingly.
+
+    Parameters
+    ----------
+    residual_fn : ``residual_fn(psi, branch)`` with ``psi`` of shape ``batch_shape + (m,)`` and
+        ``branch`` broadcastable to it; returns the residual (NaN where not assembled). It must
+        have period ``upper − lower`` in ψ.
+    batch_shape : the leading shape of the problems solved together.
+    branches : the branch values passed to ``residual_fn``.
+    grid : samples per branch and period.
+    lower, upper : the period of ψ; roots are reported in [lower, upper).
+
+    Examples
+    --------
+    The roots of cos 2ψ − 1/2 (one branch) are ±π/6 and ±5π/6:
+
+    >>> found = sweep_roots(lambda psi, b: np.cos(2 * psi) - 0.5, (), branches=(1.0,))
+    >>> int(found.count), np.degrees(found.psi).round(9)
+    (4, array([-150.,  -30.,   30.,  150.]))
+
+    Two pairs of roots 1e-6 apart, far inside one grid step, are still found (at 1 and
+    1 + 1e-6, and half a period away):
+
+    >>> pairs = lambda psi, b: np.sin(psi - 1.0) * np.sin(psi - 1.000001)
+    >>> sweep_roots(pairs, (), branches=(1.0,)).psi.round(7)
+    array([-2.1415927, -2.1415917,  1.       ,  1.000001 ])
+    """
+    period = upper - lower
+    nb = len(branches)
+    step = period / grid
+    ticks = lower + step * np.arange(grid + 1)
+    ticks[-1] = upper
+    br = np.asarray(branches, dtype=float)
+    size = int(np.prod(batch_shape, dtype=int))
+    psi = np.broadcast_to(ticks[:-1], batch_shape + (nb, grid))
+    psi_flat = psi.reshape(batch_shape + (nb * grid,))
+    g = np.asarray(residual_fn(psi_flat, np.repeat(br, grid)), dtype=float)
+    g = g.reshape((size, nb, grid))
+
+    def call(prob: NDArray[np.int_], branch: Array, x: Array) -> Array:
+        """The residual at one point per bracket, brackets gathered by problem index."""
+        if prob.size == 0:
+            return np.zeros(0)
+        # residual_fn works on batch_shape + (m,): scatter the points into a dense (size, m)
+        # block, one column per bracket of the same problem (NaN columns cost little).
+        slot = _rank_within(prob)
+        width = int(slot.max()) + 1
+        dense = np.full((size, width), np.nan)
+        dense_b = np.full((size, width), br[0])
+        dense[prob, slot] = x
+        dense_b[prob, slot] = branch
+        out = residual_fn(
+            dense.reshape(batch_shape + (width,)), dense_b.reshape(batch_shape + (width,))
+        )
+        return np.asarray(out, dtype=float).reshape(size, width)[prob, slot]
+
+    # The sample after the last is the first, one period on: the residual at ``upper`` and at
+    # ``lower`` may round to opposite signs, which would hide a root exactly at the seam.
+    g_lo, g_hi = g, np.roll(g, -1, axis=-1)
+    fin_lo, fin_hi = np.isfinite(g_lo), np.isfinite(g_hi)
+    t_lo, t_hi = ticks[:-1], ticks[1:]
+
+    # 1. Sign changes between finite neighbours (a zero sample counts on both sides: a root
+    # exactly at a sample, or at the seam of the period where ψ = ±π round differently).
+    with np.errstate(invalid="ignore"):
+        change = fin_lo & fin_hi & (g_lo * g_hi <= 0)
+    p1, b1, i1 = np.nonzero(change)
+    brackets = [(p1, b1, t_lo[i1], t_hi[i1], _lo_side(g_lo[p1, b1, i1], g_hi[p1, b1, i1]))]
+
+    # 2. Samples nearer zero than both (periodic) neighbours, all of one sign.
+    mid_g, prev_g, next_g = g, np.roll(g, 1, axis=-1), g_hi
+    with np.errstate(invalid="ignore"):
+        dip = (
+            np.isfinite(prev_g)
+            & np.isfinite(mid_g)
+            & np.isfinite(next_g)
+            & ((prev_g > 0) == (mid_g > 0))
+            & ((next_g > 0) == (mid_g > 0))
+            & (np.abs(mid_g) <= np.abs(prev_g))
+            & (np.abs(mid_g) <= np.abs(next_g))
+            & (mid_g != 0)
+        )
+    p3, b3, i3 = np.nonzero(dip)
+    sgn3 = np.sign(mid_g[p3, b3, i3])
+    bval3 = br[b3]
+    at, value = _golden_min(lambda x: sgn3 * call(p3, bval3, x), t_lo[i3] - step, t_lo[i3] + step)
+    hidden = value <= 0
+    p3, b3, at, sgn3 = p3[hidden], b3[hidden], at[hidden], sgn3[hidden]
+    lo3 = t_lo[i3[hidden]] - step
+    hi3 = t_lo[i3[hidden]] + step
+    brackets.append((p3, b3, lo3, at, sgn3))
+    brackets.append((p3, b3, at, hi3, -sgn3))
+
+    # 3. Edges of the assembled range: bisect on finiteness to the last assembled point.
+    p2, b2, i2 = np.nonzero(fin_lo != fin_hi)
+    from_lo = fin_lo[p2, b2, i2]
+    inside = np.where(from_lo, t_lo[i2], t_hi[i2])
+    outside = np.where(from_lo, t_hi[i2], t_lo[i2])
+    g_in = np.where(from_lo, g_lo[p2, b2, i2], g_hi[p2, b2, i2])
+    bval2 = br[b2]
+    edge, _ = _bisect(lambda x: np.isfinite(call(p2, bval2, x)), inside, outside)
+    g_edge = call(p2, bval2, edge)
+    with np.errstate(invalid="ignore"):
+        piece = np.isfinite(g_edge) & (g_in * g_edge <= 0)
+    brackets.append(
+        (p2[piece], b2[piece], inside[piece], edge[piece], _lo_side(g_in[piece], g_edge[piece]))
+    )
+    # Without a sign change the last piece may still hide a pair (the residual changes fastest
+    # next to a limit position): search its extremum towards zero as in 2.
+    rest = np.isfinite(g_edge) & ~piece & (g_in != 0)
+    p4, b4, in4, edge4 = p2[rest], b2[rest], inside[rest], edge[rest]
+    sgn4, bval4 = np.sign(g_in[rest]), bval2[rest]
+    at4, value4 = _golden_min(
+        lambda x: sgn4 * call(p4, bval4, x), np.minimum(in4, edge4), np.maximum(in4, edge4)
+    )
+    hidden = value4 <= 0
+    p4, b4, in4, edge4, at4, sgn4 = (x[hidden] for x in (p4, b4, in4, edge4, at4, sgn4))
+    brackets.append((p4, b4, in4, at4, sgn4))
+    brackets.append((p4, b4, at4, edge4, -sgn4))
+
+    prob = np.concatenate([x[0] for x in brackets])
+    bidx = np.concatenate([x[1] for x in brackets])
+    lo = np.concatenate([x[2] for x in brackets])
+    hi = np.concatenate([x[3] for x in brackets])
+    positive = np.concatenate([x[4] for x in brackets]) > 0  # the sign on lo's side
+    bval = br[bidx]
+    lo, hi = _bisect(lambda x: (call(prob, bval, x) > 0) == positive, lo, hi)
+    f_lo, f_hi = np.abs(call(prob, bval, lo)), np.abs(call(prob, bval, hi))
+    root = np.where(f_hi < f_lo, hi, lo)
+    # Brackets of step 2 may cross the period's end; only those roots are moved into it (an
+    # unconditional modulo would round every root to the ulp of ``upper``: at a limit position
+    # the residual is a square root of ψ's distance to the edge, and that ulp matters).
+    root = np.where(root < lower, root + period, np.where(root >= upper, root - period, root))
+
+    prob, root, bval = _unique_roots(prob, bval, root, lower, upper)
+    count = np.bincount(prob, minlength=size)
+    width = int(count.max()) if size else 0
+    slot = _rank_within(prob)
+    psi_out = np.full((size, width), np.nan)
+    br_out = np.full((size, width), np.nan)
+    psi_out[prob, slot] = root
+    br_out[prob, slot] = bval
+    return SweptRoots(
+        psi=psi_out.reshape(batch_shape + (width,)),
+        branch=br_out.reshape(batch_shape + (width,)),
+        count=count.reshape(batch_shape),
+    )
+
+
+def _lo_side(g_lo: Array, g_hi: Array) -> Array:
+    """The sign a bracket's bisection keeps on its lo side: g_lo's, or if that is 0, −g_hi's."""
+    return np.where(g_lo != 0, np.sign(g_lo), -np.sign(g_hi))
+
+
+def _unique_roots(
+    prob: NDArray[np.int_], branch: Array, root: Array, lower: float, upper: float
+) -> tuple[NDArray[np.int_], Array, Array]:
+    """Drop repeated roots (same problem and branch, a few ulps apart, also across the seam).
+
+    A root at a sample, or at an edge where the branches meet, may be bracketed twice; one
+    at the seam appears near ``lower`` and near ``upper``. Returns (problem, ψ, branch), sorted
+    by problem, ψ and branch.
+    """
+    tol = 8.0 * np.finfo(float).eps * max(abs(lower), abs(upper), 1.0)
+    order = np.lexsort((root, branch, prob))
+    prob, branch, root = prob[order], branch[order], root[order]
+    same_group = np.r_[False, (prob[1:] == prob[:-1]) & (branch[1:] == branch[:-1])]
+    repeat = same_group & (np.diff(root, prepend=-np.inf) <= tol)
+    # Across the seam: a group's last root near ``upper`` and its first near ``lower``.
+    last = np.r_[~same_group[1:], True]
+    first_of = np.maximum.accumulate(np.where(~same_group, np.arange(prob.size), 0))
+    repeat |= (
+        last
+        & (first_of != np.arange(prob.size))
+        & ((upper - root) + (root[first_of] - lower) <= tol)
+    )
+    keep = ~repeat
+    prob, branch, root = prob[keep], branch[keep], root[keep]
+    order = np.lexsort((branch, root, prob))
+    return prob[order], root[order], branch[order]
+
+
+def _rank_within(groups: NDArray[np.int_]) -> NDArray[np.int_]:
+    """For a sorted-or-not array of group ids, each entry's index among equal ids (stable)."""
+    if groups.size == 0:
+        return np.zeros(0, dtype=int)
+    order = np.argsort(groups, kind="stable")
+    sorted_groups = groups[order]
+    starts = np.r_[0, np.flatnonzero(np.diff(sorted_groups)) + 1]
+    run_start = np.repeat(starts, np.diff(np.r_[starts, sorted_groups.size]))
+    rank = np.empty_like(groups)
+    rank[order] = np.arange(groups.size) - run_start
+    return rank
+
+
+def _triad_chain(
+    psi: Array, branch: Array, anchors: Array, lengths: Array, body: Array
+) -> tuple[Array, ...]:
+    """The triad with its first link at angle ψ: J1 on it, J2 by circle ∩ circle, J3 rigid.
+
+    ``psi``, ``branch``: ``(..., m)``; anchors ``(..., 3, 2)``, lengths ``(..., 3)`` and body
+    ``(..., 3, 2)`` have the batch shape only. Returns the coordinates x1, y1, x2, y2, x3, y3 of
+    J1, J2, J3, each ``(..., m)``, NaN where J2 cannot be placed (separate coordinates: this is
+    the sweep's inner loop).
+    """
+    kx, ky = anchors[..., 0, None], anchors[..., 1, None]  # (..., 3, 1) each
+    l1, l2 = lengths[..., 0, None], lengths[..., 1, None]
+    side = body - body[..., :1, :]
+    r12 = np.hypot(side[..., 1, 0], side[..., 1, 1])[..., None]
+    j1x = kx[..., 0, :] + l1 * np.cos(psi)
+    j1y = ky[..., 0, :] + l1 * np.sin(psi)
+    j2x, j2y = _circle_xy(j1x, j1y, r12, kx[..., 1, :], ky[..., 1, :], l2, branch)
+    # The rotation taking the body's side J1J2 onto the world's: cos and sin from dot and cross.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ux = side[..., 1, 0, None] / (r12 * r12)
+        uy = side[..., 1, 1, None] / (r12 * r12)
+    ax, ay = j2x - j1x, j2y - j1y
+    cs, sn = ux * ax + uy * ay, ux * ay - uy * ax
+    tx, ty = side[..., 2, 0, None], side[..., 2, 1, None]
+    j3x = j1x + cs * tx - sn * ty
+    j3y = j1y + sn * tx + cs * ty
+    return j1x, j1y, j2x, j2y, j3x, j3y
+
+
+def triad_poses_sweep(
+    anchors: ArrayLike, lengths: ArrayLike, body: ArrayLike, *, grid: int = 512
+) -> TriadPoses:
+    """Every real pose of a triad by :func:`sweep_roots`: the independent check of the polynomial.
+
+    ψ is the angle of link K1J1; J2 is placed on both branches of circle(J1, |J1J2|) ∩
+    circle(K2, L2), J3 rigidly with the body, and the residual is ``(|J3 K3| − L3)/size``.
+    The result has the layout of :func:`triad_poses` (the body angle computed from the pose),
+    and its poses pass the same residual test.
+
+    Besides :func:`sweep_roots`' own limits, this chain is blind where a pose has J1 on K2
+    (the two circles are concentric and J2 is not determined by ψ) and ill-conditioned where a
+    pose has J1, J2 and K2 in line (the circle–circle step at its limit).
+
+    Examples
+    --------
+    >>> six = triad_poses_sweep([[0, 0], [1, -10], [9, 7]], [8, 13, 14], [[0, 0], [-6, 5], [7, 1]])
+    >>> int(six.count), np.degrees(six.angle).round(3)
+    (6, array([-176.956,  -24.415,    2.871,   68.62 ,   96.304,  167.902]))
+    """
+    anchors, lengths, body, batch = _broadcast_triad(anchors, lengths, body)
+    size = _triad_size(anchors, lengths, body)
+    # Work relative to K1 in units of the size, as the polynomial solver does: far from the
+    # origin, absolute coordinates would cost digits the residual cannot afford.
+    origin = anchors[..., :1, :]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = (anchors - origin) / size[..., None, None]
+        l = lengths / size[..., None]
+        c = body / size[..., None, None]
+
+    k3x, k3y, l3 = k[..., 2, 0, None], k[..., 2, 1, None], l[..., 2, None]
+
+    def residual(psi: Array, branch: Array) -> Array:
+        x3, y3 = _triad_chain(psi, branch, k, l, c)[4:]
+        return np.hypot(x3 - k3x, y3 - k3y) - l3
+
+    found = sweep_roots(residual, batch, grid=grid)
+    x1, y1, x2, y2, x3, y3 = _triad_chain(found.psi, found.branch, k, l, c)
+    local = np.stack((np.stack((x1, y1), -1), np.stack((x2, y2), -1), np.stack((x3, y3), -1)), -2)
+    joints = origin[..., None, :, :] + size[..., None, None, None] * local
+    side_body = body[..., 1, :] - body[..., 0, :]
+    side_world = joints[..., 1, :] - joints[..., 0, :]
+    angle = np.arctan2(
+        _cross(side_body[..., None, :], side_world), _dot(side_body[..., None, :], side_world)
+    )
+    resid = _link_residual(joints, anchors[..., None, :, :], lengths[..., None, :], size[..., None])
+    width = max(found.psi.shape[-1], MAX_POSES)
+    joints = _pad(joints, width, -3)
+    angle, resid = _pad(angle, width, -1), _pad(resid, width, -1)
+    resid = np.where(np.isfinite(resid), resid, np.nan)
+    joints, angle, resid, count = _select(joints, angle, resid, size, MAX_POSES)
+    return TriadPoses(joints=joints, angle=angle, count=count, residual=resid)

@@ -1,0 +1,616 @@
+"""Planar six-bars that decompose into dyads: the Watt I, Watt II, Stephenson I and III families.
+
+A single-degree-of-freedom six-bar has seven revolute joints and two ternary links. Where the two
+ternaries share a joint it is a **Watt** chain; where they are joined only through binary links
+(one path of one binary, one of one binary, one of two binaries) it is a **Stephenson** chain.
+Choosing the ground link gives the inversions:
+
+============  ===========================================  ===================================
+family        ground                                       construction from a driven crank
+============  ===========================================  ===================================
+Watt I        a binary link (the four-bar's frame)         four-bar, then a dyad from the
+                                                           crank to the coupler
+Watt II       a ternary (frame pivots A0, B0, D0)          two four-bars in series: a dyad
+                                                           from the rocker to the ground
+Stephenson I  the binary joining the two ternaries         four-bar, then a dyad from the
+              (crank and rocker are the ternaries)         crank to the rocker
+Stephenson II the binary in the path of two binaries       (none: see below)
+Stephenson III a ternary (paper 001's topology, planar)    four-bar, then a dyad from the
+                                                           coupler to the ground
+============  ===========================================  ===================================
+
+Every family here shares the four-bar of :class:`~linkwright.mechanisms.FourBar` exactly: ground
+pivots A0 and B0, crank A0A of length ``crank`` driven by the input θ (the angle of A − A0 from
++x), coupler AB, rocker B0B, and ``assembly`` = sign((B0 − A) × (B − A)). Then joint D closes a
+second loop as the apex of a dyad of binary links ``link1`` (from C) and ``link2`` (from X, the
+joint E on a moving link or the ground pivot D0), with ``assembly2`` = sign((X − C) × (D − C)):
+the engine's one branch convention for ``DyadRRR("D", "C", "link1", X, "link2")``. The traced
+point P sits at (u, v) in the frame of the link CD (origin C, x-axis along C→D, v to the left).
+
+Joint C (and E) is a point of a moving link given in that link's frame: (u, v) with the origin
+at the link's first joint and the x-axis toward its second (v to the left). These attachment
+coordinates are required fields: they decide the topology, and zero is no neutral default (C at
+the origin of the rocker frame *is* B0, which would freeze the dyad of a Watt II). Exact
+coincidences that leave the dyad undefined or immobile are rejected, naming the field; each
+family says which.
+
+Why there is no Stephenson II family
+------------------------------------
+With the ground in the two-binary path, the loop through the ground link has five links (ground,
+ternary, binary, ternary, binary): no four-bar contains the ground. Driving either grounded link
+(the ternary or the binary) leaves four moving links and six joints, one of them a ternary with
+all three of its joints unknown: an Assur group of class III (a *triad*), which no sequence of
+dyads can place. Its positions are the roots of a polynomial of degree six, not the intersections
+of circles; it belongs with the all-configurations solver, like Stephenson III driven at its
+output (``Stephenson3(input="output")``), and not with construction plans.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from linkwright.engine import Crank, DyadRRR, Fixed, Motion, Plan, Rigid
+from linkwright.engine.plan import Step
+from linkwright.geometry import plane
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism
+
+__all__ = [
+    "NoConstructionPlan",
+    "SixBar",
+    "Stephenson1",
+    "Stephenson3",
+    "Watt1",
+    "Watt2",
+]
+
+Array = NDArray[np.float64]
+
+# The four-bar every family starts from, step for step the FourBar family's plan.
+_FOURBAR = (
+    Fixed("A0", "A0"),
+    Fixed("B0", "B0"),
+    Crank("A", "A0", "crank"),
+    DyadRRR("B", "A", "coupler", "B0", "rocker", branch="assembly"),
+)
+_POINT = Rigid("P", "C", "D", "u", "v")
+
+
+class NoConstructionPlan(ValueError):
+    """A mechanism whose input does not leave a chain of dyads has no construction plan.
+
+    Raised on reading ``plan`` from such a mechanism (for now ``Stephenson3(input="output")``),
+    so every plan-based verb (:func:`~linkwright.mechanisms.solve`, ``circuit``,
+    ``configurations``, ``input_range``) refuses it instead of silently driving the crank.
+    """
+
+
+class _CrankInputPlan:
+    """The family's plan on the class and on crank-driven instances; an error otherwise.
+
+    A class attribute, so ``Stephenson3.plan`` stays a :class:`Plan` for code that reads a
+    family's structure (schemas, the CLI's list of dyads), while an instance driven elsewhere
+    cannot be handed to the plan evaluator by mistake.
+    """
+
+    def __init__(self, plan: Plan) -> None:
+        self.plan = plan
+
+    def __get__(self, obj: object, owner: type | None = None) -> Plan:
+        if obj is None or getattr(obj, "input", "crank") == "crank":
+            return self.plan
+        raise NoConstructionPlan(
+            f"{type(obj).__name__}(input={obj.input!r}) is driven at link D0D: the moving links "
+            "then form a triad, not a chain of dyads, so it has no construction plan; solve it "
+            "for all its real configurations with linkwright.mechanisms.allconfigs"
+        )
+
+
+def _length(motion: Motion, a: str, b: str) -> Array:
+    return plane.norm(motion.positions[b] - motion.positions[a])
+
+
+def _frame_error(motion: Motion, step: Rigid, params: dict[str, Array]) -> Array:
+    """Distance of a rigid point from its place (u, v) in the frame origin→toward."""
+    o, t, p = (motion.positions[k] for k in (step.origin, step.toward, step.name))
+    e = (t - o) / plane.norm(t - o)[..., None]
+    rel = p - o
+    u, v = (np.asarray(params[k], dtype=float)[..., None] for k in (step.u, step.v))
+    return np.hypot(plane.dot(rel, e) - u, plane.cross(e, rel) - v)
+
+
+def _sign_error(name: str, value: Array) -> InvalidMechanism | None:
+    if np.all(np.abs(value) == 1):
+        return None
+    return InvalidMechanism(f"{name}: must be 1 or -1, got {value.ravel()[:3].tolist()}")
+
+
+@dataclass(frozen=True)
+class SixBar(Mechanism):
+    """What the dyad-decomposable six-bars share: scale, residuals and the input link.
+
+    Not a family itself (it has no fields and no plan). Subclasses name the links that carry
+    their attached joints in ``attached`` (joint → the two joints spanning its link's frame) and
+    the ground pivots of their frame link in ``ground``.
+    """
+
+    ground: ClassVar[tuple[str, ...]] = ("A0", "B0")
+    attached: ClassVar[dict[str, tuple[str, str]]] = {}
+
+    if TYPE_CHECKING:  # fields every family declares (not fields of this base)
+        A0: ArrayLike
+        B0: ArrayLike
+        crank: ArrayLike
+        link2: ArrayLike
+        assembly2: ArrayLike
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        problem = _sign_error("assembly2", np.asarray(self.assembly2))
+        if problem is not None:
+            raise problem
+        self._check_attachments()
+
+    def _check_attachments(self) -> None:
+        """Reject exact coincidences that leave the second dyad undefined or immobile."""
+
+    @property
+    def frame(self) -> Array:
+        """Frame length |A0B0|."""
+        return plane.norm(np.asarray(self.B0) - np.asarray(self.A0))
+
+    @property
+    def input_link(self) -> tuple[str, str]:
+        """The driven link as (pivot, joint): θ is the angle of joint − pivot from +x."""
+        return ("A0", "A")
+
+    @property
+    def scale(self) -> Array:
+        """The largest distance between two joints of one link (links, frame, ternary sides).
+
+        For the ternaries that is the longest side of the triangle of their three joints; the
+        traced point is not a joint and does not count, as for :class:`FourBar`.
+        """
+        params = self.params()
+        sizes = [super().scale, self.frame]
+        for name, (origin, toward) in self.attached.items():
+            step = self._steps()[name]
+            assert isinstance(step, Rigid)  # an attached joint is a rigid point of its link
+            u, v = (np.asarray(params[k], dtype=float) for k in (step.u, step.v))
+            side = self._link_length(origin, toward)
+            sizes += [np.hypot(u, v), np.hypot(u - side, v)]
+        points = [np.asarray(params[p], dtype=float) for p in self.ground]
+        for i, p in enumerate(points):
+            for q in points[i + 1 :]:
+                sizes.append(plane.norm(q - p))
+        return np.maximum.reduce(np.broadcast_arrays(*sizes))
+
+    def _link_length(self, origin: str, toward: str) -> Array:
+        lengths = {("A0", "A"): "crank", ("A", "B"): "coupler", ("B0", "B"): "rocker"}
+        return np.asarray(getattr(self, lengths[(origin, toward)]), dtype=float)
+
+    @classmethod
+    def _steps(cls) -> dict[str, Step]:
+        # Read on the class: a family's constraints are its plan's steps whatever drives it.
+        return {s.name: s for s in cls.plan.steps}
+
+    def residuals(self, motion: Motion) -> dict[str, Array]:
+        """Every constraint's error at each sample of ``motion``, divided by :attr:`scale`.
+
+        One entry per constraint, recomputed from the joint positions: ``ground`` (the ground
+        pivots at their places), one per link length (``crank``, ``coupler``, ``rocker``,
+        ``link1``, ``link2``: signed length errors), one per rigid point (``C``, ``E``, ``P``:
+        distance from its (u, v) place), and ``input`` (the driven joint's distance from where
+        the input angle puts it). NaN where ``motion`` is not valid.
+        """
+        s = np.asarray(self.scale)[..., None]
+        params = self.params()
+        out: dict[str, Array] = {}
+        ground = []
+        for step in self._steps().values():
+            if isinstance(step, Fixed):
+                at = np.asarray(params[step.at], dtype=float)[..., None, :]
+                ground.append(plane.norm(motion.positions[step.name] - at))
+            elif isinstance(step, Crank):
+                out[step.length] = (
+                    _length(motion, step.pivot, step.name) - params[step.length][..., None]
+                )
+            elif isinstance(step, DyadRRR):
+                for pivot, r in ((step.p1, step.r1), (step.p2, step.r2)):
+                    out[r] = _length(motion, pivot, step.name) - params[r][..., None]
+            elif isinstance(step, Rigid):
+                out[step.name] = _frame_error(motion, step, params)
+        out["ground"] = np.maximum.reduce(ground)
+        pivot, joint = self.input_link
+        arm = self.crank if joint == "A" else self.link2
+        placed = motion.positions[pivot] + plane.polar(np.asarray(arm)[..., None], motion.input)
+        out["input"] = plane.norm(motion.positions[joint] - placed)
+        return {k: v / s for k, v in out.items()}
+
+
+@dataclass(frozen=True)
+class Watt1(SixBar):
+    """Watt I six-bar: a four-bar with a dyad from its crank to its coupler.
+
+    Watt chain (the ternaries, crank A0AC and coupler ABE, share joint A) with a binary link
+    grounded: the four-bar's frame A0B0.
+
+    Parameters
+    ----------
+    A0, B0 : points [x, y]
+        Crank and rocker pivots.
+    crank, coupler, rocker : positive lengths
+        A0A, AB, B0B.
+    u1, v1 : float
+        C on the crank, in its frame (origin A0, x along A0→A).
+    u2, v2 : float
+        E on the coupler, in its frame (origin A, x along A→B).
+    link1, link2 : positive lengths
+        CD and ED.
+    u, v : float
+        The traced point P on the link CD (origin C, x along C→D); default P = C.
+    assembly : ±1
+        sign((B0 − A) × (B − A)), as for the four-bar.
+    assembly2 : ±1
+        sign((E − C) × (D − C)).
+
+    Notes
+    -----
+    Joints A0, B0, A, B, C, E, D, P. The input θ is the angle of A − A0 from +x. C and E at the
+    joint A together (C = (crank, 0), E = (0, 0)) make the dyad's pivots coincide at every
+    input, and are rejected.
+
+    Examples
+    --------
+    The bundled ``watt1-example``. At θ = 0 the four-bar stands at A = (1, 0), B = (4, 4) (its
+    coupler along (0.6, 0.8)), so C = A0 + 1·(1, 0) + 1·(0, 1) = (1, 1) and
+    E = A + 4·(0.6, 0.8) + 3·(−0.8, 0.6) = (1, 5); D = (−2, 1) is 3 from C and 5 from E, to the
+    left of C→E (assembly2 = 1); P = C + 1.5·(−1, 0) − 1·(0, −1):
+
+    >>> from linkwright.mechanisms import solve
+    >>> m = Watt1(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=4, u1=1, v1=1, u2=4, v2=3,
+    ...           link1=3, link2=5, u=1.5, v=-1)
+    >>> at = solve(m, [0.0]).positions
+    >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "E", "D", "P")}
+    {'C': [1.0, 1.0], 'E': [1.0, 5.0], 'D': [-2.0, 1.0], 'P': [-0.5, 2.0]}
+    """
+
+    A0: ArrayLike
+    B0: ArrayLike
+    crank: ArrayLike
+    coupler: ArrayLike
+    rocker: ArrayLike
+    u1: ArrayLike
+    v1: ArrayLike
+    u2: ArrayLike
+    v2: ArrayLike
+    link1: ArrayLike
+    link2: ArrayLike
+    u: ArrayLike = 0.0
+    v: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+    assembly2: ArrayLike = 1.0
+
+    family: ClassVar[str] = "watt1"
+    point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0"})
+    length_fields: ClassVar[tuple[str, ...]] = ("crank", "coupler", "rocker", "link1", "link2")
+    reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "A", "B", "C", "E", "D", "P")
+    attached: ClassVar[dict[str, tuple[str, str]]] = {"C": ("A0", "A"), "E": ("A", "B")}
+    plan: ClassVar[Plan] = Plan(
+        (
+            *_FOURBAR,
+            Rigid("C", "A0", "A", "u1", "v1"),
+            Rigid("E", "A", "B", "u2", "v2"),
+            DyadRRR("D", "C", "link1", "E", "link2", branch="assembly2"),
+            _POINT,
+        ),
+        traced=("P",),
+    )
+
+    def _check_attachments(self) -> None:
+        both_at_a = (
+            (np.asarray(self.u1) == np.asarray(self.crank))
+            & (np.asarray(self.v1) == 0)
+            & (np.asarray(self.u2) == 0)
+            & (np.asarray(self.v2) == 0)
+        )
+        if np.any(both_at_a):
+            raise InvalidMechanism(
+                "u2, v2: E at (0, 0) is the joint A, where C = (crank, 0) also sits: the dyad's "
+                "pivots C and E would coincide at every input"
+            )
+
+
+@dataclass(frozen=True)
+class Watt2(SixBar):
+    """Watt II six-bar: two four-bars in series, the second driven by the first one's rocker.
+
+    Watt chain (the ternaries, ground A0B0D0 and rocker B0BC, share joint B0) with a ternary
+    grounded.
+
+    Parameters
+    ----------
+    A0, B0, D0 : points [x, y]
+        Crank pivot, rocker pivot, and the second four-bar's output pivot.
+    crank, coupler, rocker : positive lengths
+        A0A, AB, B0B.
+    u1, v1 : float
+        C on the rocker, in its frame (origin B0, x along B0→B).
+    link1, link2 : positive lengths
+        CD (the second coupler) and D0D (the output).
+    u, v : float
+        The traced point P on the link CD (origin C, x along C→D); default P = C.
+    assembly : ±1
+        sign((B0 − A) × (B − A)), as for the four-bar.
+    assembly2 : ±1
+        sign((D0 − C) × (D − C)).
+
+    Notes
+    -----
+    Joints A0, B0, D0, A, B, C, D, P. The input θ is the angle of A − A0 from +x. C = (0, 0) is
+    the pivot B0 itself (the dyad C–D–D0 would be a rigid triangle on the ground) and is
+    rejected.
+
+    Examples
+    --------
+    The bundled ``watt2-example``. At θ = 0 the rocker stands along (0, 1) (B = (4, 4)), so
+    C = B0 + 4·(0, 1) + 2·(−1, 0) = (2, 4); D = (5, 4) is 3 from C and 6 from D0 = (5, −2),
+    to the left of C→D0 (assembly2 = 1); P = C + 1.5·(1, 0) + 1·(0, 1):
+
+    >>> from linkwright.mechanisms import solve
+    >>> m = Watt2(A0=[0, 0], B0=[4, 0], D0=[5, -2], crank=1, coupler=5, rocker=4, u1=4, v1=2,
+    ...           link1=3, link2=6, u=1.5, v=1)
+    >>> at = solve(m, [0.0]).positions
+    >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "D", "P")}
+    {'C': [2.0, 4.0], 'D': [5.0, 4.0], 'P': [3.5, 5.0]}
+    """
+
+    A0: ArrayLike
+    B0: ArrayLike
+    D0: ArrayLike
+    crank: ArrayLike
+    coupler: ArrayLike
+    rocker: ArrayLike
+    u1: ArrayLike
+    v1: ArrayLike
+    link1: ArrayLike
+    link2: ArrayLike
+    u: ArrayLike = 0.0
+    v: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+    assembly2: ArrayLike = 1.0
+
+    family: ClassVar[str] = "watt2"
+    point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0", "D0"})
+    length_fields: ClassVar[tuple[str, ...]] = ("crank", "coupler", "rocker", "link1", "link2")
+    reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0", "A", "B", "C", "D", "P")
+    ground: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0")
+    attached: ClassVar[dict[str, tuple[str, str]]] = {"C": ("B0", "B")}
+    plan: ClassVar[Plan] = Plan(
+        (
+            *_FOURBAR[:2],
+            Fixed("D0", "D0"),
+            *_FOURBAR[2:],
+            Rigid("C", "B0", "B", "u1", "v1"),
+            DyadRRR("D", "C", "link1", "D0", "link2", branch="assembly2"),
+            _POINT,
+        ),
+        traced=("P",),
+    )
+
+    def _check_attachments(self) -> None:
+        if np.any((np.asarray(self.u1) == 0) & (np.asarray(self.v1) == 0)):
+            raise InvalidMechanism(
+                "u1, v1: C at (0, 0) is the rocker pivot B0: the dyad C–D–D0 would be a rigid "
+                "triangle on the ground"
+            )
+
+
+@dataclass(frozen=True)
+class Stephenson1(SixBar):
+    """Stephenson I six-bar: a four-bar with a dyad from its crank to its rocker.
+
+    Stephenson chain: the ternaries are the crank A0AC and the rocker B0BE, joined by the
+    frame A0B0 (grounded), by the coupler AB and by the two-binary path C–D–E.
+
+    Parameters
+    ----------
+    A0, B0 : points [x, y]
+        Crank and rocker pivots.
+    crank, coupler, rocker : positive lengths
+        A0A, AB, B0B.
+    u1, v1 : float
+        C on the crank, in its frame (origin A0, x along A0→A).
+    u2, v2 : float
+        E on the rocker, in its frame (origin B0, x along B0→B).
+    link1, link2 : positive lengths
+        CD and ED.
+    u, v : float
+        The traced point P on the link CD (origin C, x along C→D); default P = C.
+    assembly : ±1
+        sign((B0 − A) × (B − A)), as for the four-bar.
+    assembly2 : ±1
+        sign((E − C) × (D − C)).
+
+    Notes
+    -----
+    Joints A0, B0, A, B, C, E, D, P. The input θ is the angle of A − A0 from +x. C and E both at
+    their links' origins (C = A0 and E = B0, both on the ground) would make the dyad a rigid
+    triangle on the ground, and are rejected.
+
+    Examples
+    --------
+    The bundled ``stephenson1-example``. At θ = 0 the crank lies along (1, 0) and the rocker
+    along (0, 1) (A = (1, 0), B = (4, 4)), so C = (1, −1) and
+    E = B0 + 5·(0, 1) − 1·(−1, 0) = (5, 5); D = (5, −1) is 4 from C and 6 from E, to the right
+    of C→E (assembly2 = −1); P = C + 2·(1, 0) + 1·(0, 1):
+
+    >>> from linkwright.mechanisms import solve
+    >>> m = Stephenson1(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=4, u1=1, v1=-1,
+    ...                 u2=5, v2=-1, link1=4, link2=6, u=2, v=1, assembly2=-1)
+    >>> at = solve(m, [0.0]).positions
+    >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "E", "D", "P")}
+    {'C': [1.0, -1.0], 'E': [5.0, 5.0], 'D': [5.0, -1.0], 'P': [3.0, 0.0]}
+    """
+
+    A0: ArrayLike
+    B0: ArrayLike
+    crank: ArrayLike
+    coupler: ArrayLike
+    rocker: ArrayLike
+    u1: ArrayLike
+    v1: ArrayLike
+    u2: ArrayLike
+    v2: ArrayLike
+    link1: ArrayLike
+    link2: ArrayLike
+    u: ArrayLike = 0.0
+    v: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+    assembly2: ArrayLike = 1.0
+
+    family: ClassVar[str] = "stephenson1"
+    point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0"})
+    length_fields: ClassVar[tuple[str, ...]] = ("crank", "coupler", "rocker", "link1", "link2")
+    reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "A", "B", "C", "E", "D", "P")
+    attached: ClassVar[dict[str, tuple[str, str]]] = {"C": ("A0", "A"), "E": ("B0", "B")}
+    plan: ClassVar[Plan] = Plan(
+        (
+            *_FOURBAR,
+            Rigid("C", "A0", "A", "u1", "v1"),
+            Rigid("E", "B0", "B", "u2", "v2"),
+            DyadRRR("D", "C", "link1", "E", "link2", branch="assembly2"),
+            _POINT,
+        ),
+        traced=("P",),
+    )
+
+    def _check_attachments(self) -> None:
+        grounded = (
+            (np.asarray(self.u1) == 0)
+            & (np.asarray(self.v1) == 0)
+            & (np.asarray(self.u2) == 0)
+            & (np.asarray(self.v2) == 0)
+        )
+        if np.any(grounded):
+            raise InvalidMechanism(
+                "u1, v1, u2, v2: C = A0 and E = B0 are both ground pivots: the dyad C–D–E would "
+                "be a rigid triangle on the ground"
+            )
+
+
+INPUTS = ("crank", "output")
+
+
+@dataclass(frozen=True)
+class Stephenson3(SixBar):
+    """Stephenson III six-bar: a four-bar with a dyad from a coupler point to a ground pivot.
+
+    Stephenson chain with a ternary grounded: the frame A0B0D0 and the coupler ABC are the
+    ternaries, joined by the crank, the rocker and the two-binary path C–D–D0. This is paper
+    001's topology in the plane (its A, B, C, D, E, F, G are our A0, A, B, B0, C, D, D0).
+
+    Parameters
+    ----------
+    A0, B0, D0 : points [x, y]
+        Crank pivot, rocker pivot, and the pivot of the output link D0D.
+    crank, coupler, rocker : positive lengths
+        A0A, AB, B0B.
+    u1, v1 : float
+        C on the coupler, in its frame (origin A, x along A→B).
+    link1, link2 : positive lengths
+        CD and D0D (the output).
+    u, v : float
+        The traced point P on the link CD (origin C, x along C→D); default P = C.
+    assembly : ±1
+        sign((B0 − A) × (B − A)), as for the four-bar.
+    assembly2 : ±1
+        sign((D0 − C) × (D − C)).
+    input : {"crank", "output"}
+        Which grounded link the input θ drives: the crank (θ the angle of A − A0; four-bar
+        plus dyad, solved by the plan) or the output (θ the angle of D − D0). Driven at the
+        output the moving links form a triad: the mechanism has no construction plan, reading
+        ``plan`` raises :class:`NoConstructionPlan`, and its configurations come from the
+        all-configurations solver (``linkwright.mechanisms.allconfigs``). One value for the
+        whole batch, since it chooses the solver. Its constraints, and :meth:`residuals`,
+        are the same either way except ``input``.
+
+    Notes
+    -----
+    Joints A0, B0, D0, A, B, C, D, P. The coupler point C may be anywhere, A and B included.
+
+    Examples
+    --------
+    The bundled ``stephenson3-example``. At θ = 0, A = (1, 0) and B = (4, 4), so the coupler
+    point is C = A + 4·(0.6, 0.8) − 2·(−0.8, 0.6) = (5, 2); D = (2, 2) is 3 from C and 6 from
+    D0 = (2, −4), to the right of C→D0 (assembly2 = −1); P = C + 1.5·(−1, 0) + 1·(0, −1):
+
+    >>> from linkwright.mechanisms import solve
+    >>> m = Stephenson3(A0=[0, 0], B0=[4, 0], D0=[2, -4], crank=1, coupler=5, rocker=4, u1=4,
+    ...                 v1=-2, link1=3, link2=6, u=1.5, v=1, assembly2=-1)
+    >>> at = solve(m, [0.0]).positions
+    >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "D", "P")}
+    {'C': [5.0, 2.0], 'D': [2.0, 2.0], 'P': [3.5, 1.0]}
+
+    Driven at the output it is a triad, and the plan-based verbs refuse it:
+
+    >>> solve(Stephenson3(**{**m.params(), "input": "output"}), [0.0])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.sixbar.NoConstructionPlan: Stephenson3(input='output') is driven ...
+    """
+
+    A0: ArrayLike
+    B0: ArrayLike
+    D0: ArrayLike
+    crank: ArrayLike
+    coupler: ArrayLike
+    rocker: ArrayLike
+    u1: ArrayLike
+    v1: ArrayLike
+    link1: ArrayLike
+    link2: ArrayLike
+    u: ArrayLike = 0.0
+    v: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+    assembly2: ArrayLike = 1.0
+    input: str = "crank"
+
+    family: ClassVar[str] = "stephenson3"
+    point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0", "D0"})
+    length_fields: ClassVar[tuple[str, ...]] = ("crank", "coupler", "rocker", "link1", "link2")
+    reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0", "A", "B", "C", "D", "P")
+    ground: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0")
+    attached: ClassVar[dict[str, tuple[str, str]]] = {"C": ("A", "B")}
+    plan: ClassVar[Plan] = _CrankInputPlan(  # type: ignore[assignment]
+        Plan(
+            (
+                *_FOURBAR[:2],
+                Fixed("D0", "D0"),
+                *_FOURBAR[2:],
+                Rigid("C", "A", "B", "u1", "v1"),
+                DyadRRR("D", "C", "link1", "D0", "link2", branch="assembly2"),
+                _POINT,
+            ),
+            traced=("P",),
+        )
+    )
+
+    def __post_init__(self) -> None:
+        # The base converts every field to a float array; the string field sits that out
+        # (replaced by a number for the duration) and is checked here instead.
+        choice = self.input
+        if not isinstance(choice, str) or choice not in INPUTS:
+            raise InvalidMechanism(f"input: must be 'crank' or 'output', got {choice!r}")
+        object.__setattr__(self, "input", 0.0)
+        try:
+            super().__post_init__()
+        finally:
+            object.__setattr__(self, "input", str(choice))
+
+    @property
+    def input_link(self) -> tuple[str, str]:
+        return ("A0", "A") if self.input == "crank" else ("D0", "D")
