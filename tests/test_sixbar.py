@@ -717,7 +717,6 @@ def _solve_on(m, theta, branches=None):
     return evaluate(m.plan, m.params(), theta, points=m.point_fields, branches=branches, order=0)
 
 
-@pytest.mark.xfail(raises=NotImplementedError, strict=False, reason="multi-dyad circuit tracer")
 @pytest.mark.parametrize("cls", SIXBARS, ids=lambda c: c.family)
 def test_batch_circuits_are_closed(cls):
     rng = np.random.default_rng(20250501 + SIXBARS.index(cls))
@@ -726,7 +725,6 @@ def test_batch_circuits_are_closed(cls):
     assert has.mean() > 0.3 and checked.sum() > 0.4 * has.sum()
 
 
-@pytest.mark.xfail(raises=NotImplementedError, strict=False, reason="multi-dyad circuit tracer")
 @settings(max_examples=30, deadline=None)
 @given(drawn=sixbars(batched=True), n=st.integers(8, 300))
 def test_single_circuit_is_closed(drawn, n):
@@ -738,7 +736,6 @@ def test_single_circuit_is_closed(drawn, n):
     assert checked.all()
 
 
-@pytest.mark.xfail(raises=NotImplementedError, strict=False, reason="multi-dyad circuit tracer")
 @pytest.mark.parametrize("name", EXAMPLE_NAMES)
 def test_example_circuits_are_one_even_turn(name):
     """A well-conditioned full-turn six-bar: one turn, and no step far above the mean."""
@@ -751,12 +748,6 @@ def test_example_circuits_are_one_even_turn(name):
         assert steps.max() <= 3 * steps.mean(), (joint, steps.max() / steps.mean())
 
 
-@pytest.mark.xfail(
-    raises=ValueError,
-    strict=True,
-    reason="engine.circuits._walk stacks an empty list of segments when no linkage of the batch "
-    "has an arc: remove this mark when trace returns an all-invalid motion instead",
-)
 @pytest.mark.parametrize("cls", SIXBARS, ids=lambda c: c.family)
 def test_circuit_of_a_linkage_that_never_assembles(cls):
     """No circuit, every joint NaN, for one six-bar or a batch (the second dyad far too short)."""

@@ -482,6 +482,26 @@ def trace(
     else:
         theta0 = np.where(arcs.full, start, np.where(have_arc, lo, 0.0))
         seg_start, seg_end, seg_branches = _walk(plan, params, points, theta0, doc, period, usable)
+        for finer in REFINE_GRIDS:
+            failed = usable & ~np.isfinite(seg_start[..., 0])
+            if not failed.any():
+                break
+            # A limit gap narrower than a scan cell was stepped over and the walk wandered into
+            # a neighbouring arc without closing: walk those linkages again on a finer scan.
+            sub = _subset(params, points, shape, failed)
+            again = _walk(
+                plan,
+                sub,
+                points,
+                theta0[failed],
+                {k: v[failed] for k, v in doc.items()},
+                period[failed],
+                np.ones(int(failed.sum()), bool),
+                grid=finer,
+            )
+            seg_start, seg_end, seg_branches = _scatter(
+                (seg_start, seg_end, seg_branches), again, failed
+            )
         weight = _path_lengths(plan, params, points, seg_start, seg_end, seg_branches)
     seg_start = np.where(usable[..., None], seg_start, np.nan)
     # A circuit between limits has at least two segments (up, then back); a full turn has one.
@@ -584,7 +604,39 @@ def _path_lengths(plan, params, points, seg_start, seg_end, seg_branches) -> Arr
     return np.where(np.isfinite(seg_start), np.maximum(travel, tiny), 0.0)
 
 
-def _walk(plan, params, points, theta0, doc, period, usable):
+REFINE_GRIDS = (8 * GRID, 64 * GRID)
+
+
+def _subset(params, points, shape, mask):
+    """The parameters of the linkages selected by ``mask`` (a boolean array of batch shape)."""
+    out = {}
+    for key, value in params.items():
+        a = np.asarray(value, dtype=float)
+        tail = (2,) if key in points else ()
+        out[key] = np.broadcast_to(a, shape + tail)[mask]
+    return out
+
+
+def _scatter(full, part, mask):
+    """Put ``part``'s segments (the linkages in ``mask``) into ``full``'s, widened as needed."""
+    (s0, e0, b0), (s1, e1, b1) = full, part
+    width = max(s0.shape[-1], s1.shape[-1])
+
+    def widen(a, fill=np.nan):
+        pad = width - a.shape[-1]
+        return np.concatenate((a, np.full(a.shape[:-1] + (pad,), fill)), -1) if pad else a
+
+    s0, e0, s1, e1 = (widen(a).copy() for a in (s0, e0, s1, e1))
+    s0[mask], e0[mask] = s1, e1
+    branches = {}
+    for k in b0:
+        b = widen(b0[k]).copy()
+        b[mask] = widen(b1[k])
+        branches[k] = b
+    return s0, e0, branches
+
+
+def _walk(plan, params, points, theta0, doc, period, usable, grid=GRID):
     """Follow each linkage from ``theta0`` on its document branches until it closes.
 
     Returns the segments' starts, ends and per-dyad branches, shape ``batch + (S,)``, NaN-padded.
@@ -598,7 +650,9 @@ def _walk(plan, params, points, theta0, doc, period, usable):
     for _ in range(MAX_SEGMENTS):
         if not active.any():
             break
-        end, which, hit = _next_limit(plan, params, points, theta, direction, branches, period)
+        end, which, hit = _next_limit(
+            plan, params, points, theta, direction, branches, period, grid
+        )
         seg_end = np.where(hit, end, theta + direction * period)
         starts.append(np.where(active, theta, np.nan))
         ends.append(np.where(active, seg_end, np.nan))
@@ -613,6 +667,9 @@ def _walk(plan, params, points, theta0, doc, period, usable):
         for k in branches:
             home &= branches[k] == doc[k]
         active = active & hit & ~home
+    if not starts:  # nothing in the batch assembles: no segments at all
+        nan = np.full(theta.shape + (1,), np.nan)
+        return nan, nan.copy(), {k: np.full(theta.shape + (1,), np.nan) for k in doc}
     # A walk that does not close within MAX_SEGMENTS is not a circuit we can vouch for.
     failed = active
     seg_start = np.stack(starts, -1)
@@ -622,7 +679,7 @@ def _walk(plan, params, points, theta0, doc, period, usable):
     return seg_start, seg_end, seg_branches
 
 
-def _next_limit(plan, params, points, theta, direction, branches, period):
+def _next_limit(plan, params, points, theta, direction, branches, period, grid=GRID):
     """The first limit position met going from ``theta`` in ``direction``, within one period.
 
     Scans the assembly predicate on the branches given in steps of one grid cell, then bisects
@@ -631,7 +688,7 @@ def _next_limit(plan, params, points, theta, direction, branches, period):
     """
     shape = theta.shape
     turns = np.rint(period / TWO_PI)
-    nodes = GRID * int(turns.max()) if turns.size else GRID
+    nodes = grid * int(turns.max()) if turns.size else grid
     step = direction * period / nodes
     br = {k: v[..., None] for k, v in branches.items()}
     found = np.zeros(shape, dtype=bool)
