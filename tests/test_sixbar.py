@@ -998,3 +998,30 @@ def test_hoeken_straight_line():
     cheb = example("chebyshev-straight-line")
     band = solve(cheb, np.linspace(math.atan2(3, 4), math.pi / 2, 20001), order=0)
     np.testing.assert_allclose(rise.max(), band.positions["P"][:, 1].max() - 4.0, rtol=1e-6)
+
+
+def test_walk_over_a_limit_gap_narrower_than_a_scan_cell():
+    """Its arc is 0.025 rad wide, beside a gap finer than the 1440-cell scan: the first walk
+    wanders into the next arc and never closes; the finer re-walk traces the arc itself."""
+    m = Watt1(
+        A0=[-0.010139017633568021, -0.07165371904324314],
+        B0=[-0.013892849374577007, -0.06931799195668258],
+        crank=0.00619866055722641,
+        coupler=0.0007264799321700232,
+        rocker=0.007744982727585279,
+        u1=-0.006644873058510256,
+        v1=-0.00035382378663062453,
+        u2=-0.007896687041997466,
+        v2=-0.007936789253604503,
+        link1=0.0029827940942821485,
+        link2=0.004762188633303131,
+        assembly=-1,
+        assembly2=-1,
+    )
+    motion = circuit(m, 64)
+    arcs = input_range(m)
+    assert motion.valid.all()
+    assert motion.input.min() == pytest.approx(arcs.lo[0], abs=1e-12)
+    assert motion.input.max() == pytest.approx(arcs.hi[0], abs=1e-12)
+    for name, r in m.residuals(motion).items():
+        assert np.nanmax(np.abs(r)) < 1e-10, name
