@@ -94,3 +94,26 @@ def test_output_driven_stephenson3_reports_every_configuration(capsys, tmp_path)
             assert c["residual"] < 1e-10
     status, _, err = run(capsys, "curve", str(path))
     assert status == 2 and "triad" in err
+
+
+def test_irrational_gear_ratio_is_a_clear_error(capsys, tmp_path):
+    doc = {
+        "format": "linkwright/1",
+        "mechanism": {
+            "family": "geared-fivebar",
+            "A0": [0, 0],
+            "B0": [3, 0],
+            "crank1": 1,
+            "crank2": 1,
+            "link1": 3,
+            "link2": 3,
+            "ratio": 2**0.5,
+        },
+    }
+    path = tmp_path / "irrational.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    for command in ("curve", "analyze"):
+        status, _, err = run(capsys, command, str(path))
+        assert status == 2 and "1.41421356237 is not a fraction" in err, err
+    status, _, _ = run(capsys, "solve", str(path), "--input", "10")
+    assert status == 0  # solving at given inputs needs no period

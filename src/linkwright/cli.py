@@ -672,6 +672,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     Click's own error display (usage block plus message) is replaced by one ``error:`` line, and
     every expected failure (bad file, bad document, bad option) exits with status 2.
     """
+    from linkwright.engine import NoPeriod
     from linkwright.io.documents import DocumentError
     from linkwright.mechanisms.sixbar import NoConstructionPlan
 
@@ -682,7 +683,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = command.main(args=args, prog_name="linkwright", standalone_mode=False)
     except click_exceptions.ClickException as exc:
         return _fail(exc.format_message())
-    except (CliError, DocumentError, NoConstructionPlan) as exc:
+    except (CliError, DocumentError, NoConstructionPlan, NoPeriod) as exc:
         return _fail(str(exc))
     except typer.Abort:
         return _fail("aborted", 1)

@@ -1,6 +1,6 @@
 """The engine: construction plans, batched evaluation with derivatives, limits and circuits."""
 
-from linkwright.engine.circuits import InputArcs, input_arcs, input_turns, trace
+from linkwright.engine.circuits import InputArcs, NoPeriod, input_arcs, input_turns, trace
 from linkwright.engine.evaluate import Motion, evaluate
 from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, Rigid, Trammel
 from linkwright.engine.triad import TriadPoses, sweep_roots, triad_poses, triad_rates
@@ -12,6 +12,7 @@ __all__ = [
     "Fixed",
     "InputArcs",
     "Motion",
+    "NoPeriod",
     "Plan",
     "Rigid",
     "Trammel",

@@ -27,7 +27,7 @@ from linkwright.engine.evaluate import Motion, batch_shape, evaluate, place_all
 from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan
 from linkwright.geometry import plane
 
-__all__ = ["InputArcs", "input_arcs", "input_turns", "trace"]
+__all__ = ["InputArcs", "NoPeriod", "input_arcs", "input_turns", "trace"]
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
@@ -349,6 +349,10 @@ MAX_TURNS = 64
 RATIO_TOL = 1e-9
 
 
+class NoPeriod(ValueError):
+    """A geared linkage whose motion never repeats (an irrational gear ratio): no circuit."""
+
+
 def input_turns(plan: Plan, params: Mapping[str, ArrayLike], *, points=frozenset()) -> NDArray:
     """How many turns of the input before every crank is back where it started.
 
@@ -357,7 +361,7 @@ def input_turns(plan: Plan, params: Mapping[str, ArrayLike], *, points=frozenset
 
     Raises
     ------
-    ValueError
+    NoPeriod
         If some ratio is not a fraction with a denominator up to ``MAX_TURNS`` (to 1e-9): such
         a linkage never repeats, and there is no closed circuit to trace.
 
@@ -383,10 +387,20 @@ def input_turns(plan: Plan, params: Mapping[str, ArrayLike], *, points=frozenset
         turns = np.where((turns == 0) & whole, q, turns)
         if np.all(turns > 0):
             return turns
-    bad = [float(np.asarray(r)[turns == 0].ravel()[0]) for r in ratios if np.any(turns == 0)]
-    raise ValueError(
-        f"gear ratio {bad[0]:g} is not a fraction p/q with q ≤ {MAX_TURNS}: the linkage never "
-        "repeats, so it has no closed circuit (give a rational ratio, e.g. 3/2)"
+    stuck = turns == 0
+    for r in ratios:
+        x = r[..., None] * np.arange(1, MAX_TURNS + 1)
+        whole = np.abs(x - np.round(x)) <= RATIO_TOL * np.maximum(1.0, np.abs(x))
+        alone = stuck & ~whole.any(-1)
+        if alone.any():
+            raise NoPeriod(
+                f"gear ratio {float(r[alone].ravel()[0]):.12g} is not a fraction p/q with "
+                f"q ≤ {MAX_TURNS}: the linkage never repeats, so it has no closed circuit "
+                "(give a rational ratio, e.g. 1.5 for 3/2)"
+            )
+    raise NoPeriod(
+        f"the gear ratios together repeat only after more than {MAX_TURNS} input turns: "
+        "the linkage has no closed circuit to trace"
     )
 
 
