@@ -17,7 +17,13 @@ from linkwright.analysis.conic import (
     ellipse_axes,
     normalise_conic,
 )
-from linkwright.analysis.general import dyad_transmission_angles, general_report, point_speed
+from linkwright.analysis.general import (
+    _deg,
+    _num,
+    dyad_transmission_angles,
+    general_report,
+    point_speed,
+)
 from linkwright.analysis.planar import (
     coefficients,
     fourbar_class,
@@ -54,16 +60,6 @@ __all__ = [
     "transmission_angle",
     "transmission_extremes",
 ]
-
-
-def _num(x: Any, digits: int = 12) -> float | None:
-    """A JSON number, or None for NaN/inf (a report never carries NaN)."""
-    v = float(x)
-    return round(v, digits) if math.isfinite(v) else None
-
-
-def _deg(x: Any) -> float | None:
-    return _num(np.degrees(float(x)))
 
 
 def _wrap_deg(x: Any) -> float | None:

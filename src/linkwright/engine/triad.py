@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine.plan import ASSEMBLY_TOL
+from linkwright.geometry import plane
 
 __all__ = [
     "MAX_POSES",
@@ -124,22 +125,6 @@ class TriadRates:
 # ----------------------------------------------------------------------------------------------
 
 
-def _cross(a: Array, b: Array) -> Array:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _dot(a: Array, b: Array) -> Array:
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
-
-
-def _perp(a: Array) -> Array:
-    return np.stack((-a[..., 1], a[..., 0]), axis=-1)
-
-
-def _norm(a: Array) -> Array:
-    return np.hypot(a[..., 0], a[..., 1])
-
-
 def _rotate(c: Array, s: Array, vec: Array) -> Array:
     """``vec`` turned by the angle whose cosine and sine are ``c`` and ``s``."""
     return np.stack((c * vec[..., 0] - s * vec[..., 1], s * vec[..., 0] + c * vec[..., 1]), axis=-1)
@@ -205,14 +190,14 @@ def _broadcast_triad(
 def _triad_size(anchors: Array, lengths: Array, body: Array) -> Array:
     """The triad's size: its longest link, body side or anchor distance."""
     pairs = ((0, 1), (0, 2), (1, 2))
-    sides = [_norm(body[..., i, :] - body[..., j, :]) for i, j in pairs]
-    spans = [_norm(anchors[..., i, :] - anchors[..., j, :]) for i, j in pairs]
+    sides = [plane.norm(body[..., i, :] - body[..., j, :]) for i, j in pairs]
+    spans = [plane.norm(anchors[..., i, :] - anchors[..., j, :]) for i, j in pairs]
     return np.maximum.reduce([np.abs(lengths).max(axis=-1), *sides, *spans])
 
 
 def _link_residual(joints: Array, anchors: Array, lengths: Array, size: Array) -> Array:
     """Largest ``|distance − length|`` over the three links, relative to ``size``."""
-    gap = np.abs(_norm(joints - anchors) - lengths).max(axis=-1)
+    gap = np.abs(plane.norm(joints - anchors) - lengths).max(axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         return gap / size
 
@@ -371,8 +356,8 @@ def _newton(x: Array, phi: Array, k: Array, l: Array, c: Array, steps: int) -> t
         cs, sn = np.cos(phi)[..., None], np.sin(phi)[..., None]
         arm = _rotate(cs, sn, c)  # R c_k, (..., m, 3, 2)
         e = x[..., None, :] + arm - k
-        r = 0.5 * (_dot(e, e) - l * l)
-        jac = np.concatenate((e, _dot(e, _perp(arm))[..., None]), axis=-1)
+        r = 0.5 * (plane.dot(e, e) - l * l)
+        jac = np.concatenate((e, plane.dot(e, plane.perp(arm))[..., None]), axis=-1)
         step, det = _solve3(jac, r)
         # Coordinates are normalised (size 1), so det is relative; below 1e-14 the step would be
         # rounding noise amplified, at a pose that is a double root and already accurate.
@@ -385,11 +370,11 @@ def _newton(x: Array, phi: Array, k: Array, l: Array, c: Array, steps: int) -> t
 
 def _line_circle(w: Array, b: Array, radius: Array) -> tuple[Array, Array]:
     """Both points Y with ``Y·w = b`` and ``|Y| = radius`` (NaN where the line misses)."""
-    ww = _dot(w, w)
+    ww = plane.dot(w, w)
     with np.errstate(divide="ignore", invalid="ignore"):
         foot = (b / ww)[..., None] * w
         half = np.sqrt((radius * radius - b * b / ww) / ww)
-    side = half[..., None] * _perp(w)
+    side = half[..., None] * plane.perp(w)
     return foot + side, foot - side
 
 
@@ -420,11 +405,11 @@ def _pose_candidates(
     lk = l[..., None, :]
     c2, c3 = c[..., None, 1, :], c[..., None, 2, :]
     # Y·w_k = b_k: the difference of link k's circle equation and link 1's.
-    b2 = 0.5 * (lk[..., 1] ** 2 - lk[..., 0] ** 2 - _dot(c2, c2) - _dot(kk2, kk2))
-    b3 = 0.5 * (lk[..., 2] ** 2 - lk[..., 0] ** 2 - _dot(c3, c3) - _dot(kk3, kk3))
-    b2 = b2 + _dot(kk2, arm[..., 1, :])
-    b3 = b3 + _dot(kk3, arm[..., 2, :])
-    use2 = _norm(w2) >= _norm(w3)
+    b2 = 0.5 * (lk[..., 1] ** 2 - lk[..., 0] ** 2 - plane.dot(c2, c2) - plane.dot(kk2, kk2))
+    b3 = 0.5 * (lk[..., 2] ** 2 - lk[..., 0] ** 2 - plane.dot(c3, c3) - plane.dot(kk3, kk3))
+    b2 = b2 + plane.dot(kk2, arm[..., 1, :])
+    b3 = b3 + plane.dot(kk3, arm[..., 2, :])
+    use2 = plane.norm(w2) >= plane.norm(w3)
     pa, pb = _line_circle(np.where(use2[..., None], w2, w3), np.where(use2, b2, b3), lk[..., 0])
     x = np.concatenate((x_cramer, pa, pb), axis=-2)
     return x, np.concatenate((phi, phi, phi), axis=-1)
@@ -659,27 +644,32 @@ def triad_rates(
     lengths = np.asarray(lengths, dtype=float)
     e = j - k
     rho = j - j[..., :1, :]
-    body = np.maximum(_norm(rho[..., 1, :]), _norm(rho[..., 2, :]))
+    body = np.maximum(plane.norm(rho[..., 1, :]), plane.norm(rho[..., 2, :]))
     with np.errstate(divide="ignore", invalid="ignore"):
         row_scale = 1.0 / lengths  # each row is then a unit direction and a lever arm / size
         ang_scale = 1.0 / body
         ex, ey = e[..., 0] * row_scale, e[..., 1] * row_scale
         m = np.stack(
-            np.broadcast_arrays(ex, ey, _cross(rho, e) * row_scale * ang_scale[..., None]), axis=-1
+            np.broadcast_arrays(ex, ey, plane.cross(rho, e) * row_scale * ang_scale[..., None]),
+            axis=-1,
         )
-        r1 = _dot(e, kv) * row_scale
+        r1 = plane.dot(e, kv) * row_scale
         sol1, det = _solve3(m, r1)
         v = sol1[..., :2]
         omega = sol1[..., 2] * ang_scale
-        vel = v[..., None, :] + omega[..., None, None] * _perp(rho)
+        vel = v[..., None, :] + omega[..., None, None] * plane.perp(rho)
         rel_vel = vel - kv
-        r2 = _dot(e, ka) - _dot(rel_vel, rel_vel) + (omega**2)[..., None] * _dot(e, rho)
+        r2 = (
+            plane.dot(e, ka)
+            - plane.dot(rel_vel, rel_vel)
+            + (omega**2)[..., None] * plane.dot(e, rho)
+        )
         sol2, _ = _solve3(m, r2 * row_scale)
         a = sol2[..., :2]
         alpha = sol2[..., 2] * ang_scale
         acc = (
             a[..., None, :]
-            + alpha[..., None, None] * _perp(rho)
+            + alpha[..., None, None] * plane.perp(rho)
             - (omega**2)[..., None, None] * rho
         )
     regular = np.abs(det) > SINGULAR_DET
@@ -1065,7 +1055,8 @@ def triad_poses_sweep(
     side_body = body[..., 1, :] - body[..., 0, :]
     side_world = joints[..., 1, :] - joints[..., 0, :]
     angle = np.arctan2(
-        _cross(side_body[..., None, :], side_world), _dot(side_body[..., None, :], side_world)
+        plane.cross(side_body[..., None, :], side_world),
+        plane.dot(side_body[..., None, :], side_world),
     )
     resid = _link_residual(joints, anchors[..., None, :, :], lengths[..., None, :], size[..., None])
     width = max(found.psi.shape[-1], MAX_POSES)

@@ -12,6 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "cross",
     "dot",
+    "frame_error",
     "norm",
     "perp",
     "polar",
@@ -59,6 +60,21 @@ def norm(a: Array) -> Array:
     np.float64(5.0)
     """
     return np.hypot(a[..., 0], a[..., 1])
+
+
+def frame_error(origin: Array, toward: Array, point: Array, u: ArrayLike, v: ArrayLike) -> Array:
+    """How far ``point`` is from (u, v) in the frame origin→toward (x along it, v to the left).
+
+    The residual of a rigid point on a link; NaN where origin and toward coincide.
+
+    >>> frame_error(np.array([1.0, 1.0]), np.array([1.0, 3.0]), np.array([0.0, 2.0]), 1.0, 1.0)
+    np.float64(0.0)
+    """
+    e = toward - origin
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = e / norm(e)[..., None]
+    rel = point - origin
+    return np.hypot(dot(rel, e) - np.asarray(u), cross(e, rel) - np.asarray(v))
 
 
 def polar(length: ArrayLike, angle: ArrayLike) -> Array:

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine.triad import circle_intersection, triad_poses
+from linkwright.geometry import plane
 
 __all__ = ["JOINTS", "AllConfigurations", "solve_all"]
 
@@ -82,40 +83,12 @@ class AllConfigurations:
     residual: Array
 
 
-def _norm(a: Array) -> Array:
-    return np.hypot(a[..., 0], a[..., 1])
-
-
-def _cross(a: Array, b: Array) -> Array:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _dot(a: Array, b: Array) -> Array:
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1]
-
-
-def _perp(a: Array) -> Array:
-    return np.stack((-a[..., 1], a[..., 0]), axis=-1)
-
-
-def _polar(length: Array, angle: Array) -> Array:
-    return np.stack((length * np.cos(angle), length * np.sin(angle)), axis=-1)
-
-
 def _on_link(origin: Array, toward: Array, u: Array, v: Array) -> Array:
     """The point (u, v) in the frame origin→toward (x along the link, v to the left)."""
     e = toward - origin
     with np.errstate(divide="ignore", invalid="ignore"):
-        e = e / _norm(e)[..., None]
-    return origin + u[..., None] * e + v[..., None] * _perp(e)
-
-
-def _frame_error(origin: Array, toward: Array, point: Array, u: Array, v: Array) -> Array:
-    e = toward - origin
-    with np.errstate(divide="ignore", invalid="ignore"):
-        e = e / _norm(e)[..., None]
-    rel = point - origin
-    return np.hypot(_dot(rel, e) - u, _cross(e, rel) - v)
+        e = e / plane.norm(e)[..., None]
+    return origin + u[..., None] * e + v[..., None] * plane.perp(e)
 
 
 def _read(mechanism: Any) -> tuple[dict[str, Array], str]:
@@ -139,7 +112,7 @@ def _scale(p: dict[str, Array]) -> Array:
     """The largest distance between two joints of one link (as ``SixBar.scale``)."""
     sizes = [p[k] for k in ("crank", "coupler", "rocker", "link1", "link2")]
     sizes += [np.hypot(p["u1"], p["v1"]), np.hypot(p["u1"] - p["coupler"], p["v1"])]
-    sizes += [_norm(p[a] - p[b]) for a, b in (("A0", "B0"), ("A0", "D0"), ("B0", "D0"))]
+    sizes += [plane.norm(p[a] - p[b]) for a, b in (("A0", "B0"), ("A0", "D0"), ("B0", "D0"))]
     return np.maximum.reduce(np.broadcast_arrays(*sizes))
 
 
@@ -213,7 +186,7 @@ def solve_all(mechanism: Any, inputs: ArrayLike) -> AllConfigurations:
     if driven == "crank":
         s1 = np.array([1.0, 1.0, -1.0, -1.0])
         s2 = np.array([1.0, -1.0, 1.0, -1.0])
-        a = q["A0"] + _polar(q["crank"], th)
+        a = q["A0"] + plane.polar(q["crank"], th)
         a = np.broadcast_to(a, batch + theta.shape[-1:] + (4, 2))
         b = circle_intersection(a, q["coupler"], q["B0"], q["rocker"], s1)
         c = _on_link(a, b, q["u1"], q["v1"])
@@ -222,7 +195,7 @@ def solve_all(mechanism: Any, inputs: ArrayLike) -> AllConfigurations:
         sign2 = np.broadcast_to(s2, d.shape[:-1])
         real = np.isfinite(d).all(axis=-1)
     else:
-        d_known = q["D0"][..., 0, :] + _polar(q["link2"][..., 0], th[..., 0])
+        d_known = q["D0"][..., 0, :] + plane.polar(q["link2"][..., 0], th[..., 0])
         anchors = np.stack(np.broadcast_arrays(q["A0"][..., 0, :], q["B0"][..., 0, :], d_known), -2)
         lengths = np.stack(
             np.broadcast_arrays(q["crank"][..., 0], q["rocker"][..., 0], q["link1"][..., 0]), -1
@@ -241,8 +214,8 @@ def solve_all(mechanism: Any, inputs: ArrayLike) -> AllConfigurations:
         d = np.broadcast_to(d_known[..., None, :], a.shape)
         real = poses.valid
         with np.errstate(invalid="ignore"):
-            sign1 = np.sign(_cross(q["B0"] - a, b - a))
-            sign2 = np.sign(_cross(q["D0"] - c, d - c))
+            sign1 = np.sign(plane.cross(q["B0"] - a, b - a))
+            sign2 = np.sign(plane.cross(q["D0"] - c, d - c))
 
     pos = {"A": a, "B": b, "C": c, "D": d, "P": _on_link(c, d, q["u"], q["v"])}
     for f in _POINTS:
@@ -255,17 +228,17 @@ def solve_all(mechanism: Any, inputs: ArrayLike) -> AllConfigurations:
     s = scale[..., None, None]
     with np.errstate(divide="ignore", invalid="ignore"):
         residuals = {
-            "crank": np.abs(_norm(pos["A"] - pos["A0"]) - q["crank"]) / s,
-            "coupler": np.abs(_norm(pos["B"] - pos["A"]) - q["coupler"]) / s,
-            "rocker": np.abs(_norm(pos["B"] - pos["B0"]) - q["rocker"]) / s,
-            "link1": np.abs(_norm(pos["D"] - pos["C"]) - q["link1"]) / s,
-            "link2": np.abs(_norm(pos["D"] - pos["D0"]) - q["link2"]) / s,
-            "C": _frame_error(pos["A"], pos["B"], pos["C"], q["u1"], q["v1"]) / s,
-            "P": _frame_error(pos["C"], pos["D"], pos["P"], q["u"], q["v"]) / s,
+            "crank": np.abs(plane.norm(pos["A"] - pos["A0"]) - q["crank"]) / s,
+            "coupler": np.abs(plane.norm(pos["B"] - pos["A"]) - q["coupler"]) / s,
+            "rocker": np.abs(plane.norm(pos["B"] - pos["B0"]) - q["rocker"]) / s,
+            "link1": np.abs(plane.norm(pos["D"] - pos["C"]) - q["link1"]) / s,
+            "link2": np.abs(plane.norm(pos["D"] - pos["D0"]) - q["link2"]) / s,
+            "C": plane.frame_error(pos["A"], pos["B"], pos["C"], q["u1"], q["v1"]) / s,
+            "P": plane.frame_error(pos["C"], pos["D"], pos["P"], q["u"], q["v"]) / s,
         }
         pivot, joint, arm = ("A0", "A", "crank") if driven == "crank" else ("D0", "D", "link2")
-        placed = pos[pivot] + _polar(q[arm], th)
-        residuals["input"] = _norm(pos[joint] - placed) / s
+        placed = pos[pivot] + plane.polar(q[arm], th)
+        residuals["input"] = plane.norm(pos[joint] - placed) / s
     residuals = {k: np.where(valid, v, np.nan) for k, v in residuals.items()}
     residual = np.where(valid, np.maximum.reduce(list(residuals.values())), np.nan)
     return AllConfigurations(

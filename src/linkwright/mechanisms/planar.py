@@ -29,11 +29,7 @@ def _link_error(motion: Motion, a: str, b: str, length: Array) -> Array:
 def _frame_error(motion: Motion, origin: str, toward: str, point: str, u, v) -> Array:
     """How far the traced point is from its place (u, v) in the frame origin→toward."""
     o, t, p = (motion.positions[k] for k in (origin, toward, point))
-    e = (t - o) / plane.norm(t - o)[..., None]
-    rel = p - o
-    return np.hypot(
-        plane.dot(rel, e) - np.asarray(u)[..., None], plane.cross(e, rel) - np.asarray(v)[..., None]
-    )
+    return plane.frame_error(o, t, p, np.asarray(u)[..., None], np.asarray(v)[..., None])
 
 
 @dataclass(frozen=True)
@@ -271,15 +267,17 @@ class GearedFiveBar(Mechanism):
         )
 
     def crank2_angle(self, theta1: ArrayLike) -> Array:
-        """θ2, the angle of B − B0, at the input θ1 (radians)."""
-        return self.phase2 + self.ratio * (np.asarray(theta1) - self.phase1)
+        """θ2, the angle of B − B0, at the inputs θ1 (radians; shape ``batch + (samples,)``,
+        like a motion's ``input``)."""
+        phase1, phase2, ratio = (
+            np.asarray(x)[..., None] for x in (self.phase1, self.phase2, self.ratio)
+        )
+        return phase2 + ratio * (np.asarray(theta1) - phase1)
 
     def residuals(self, motion: Motion) -> dict[str, Array]:
         s = np.asarray(self.scale)[..., None]
         b = motion.positions["B"] - motion.positions["B0"]
-        theta2 = np.asarray(self.phase2)[..., None] + np.asarray(self.ratio)[..., None] * (
-            motion.input - np.asarray(self.phase1)[..., None]
-        )
+        theta2 = self.crank2_angle(motion.input)
         gear = plane.cross(plane.unit_direction(theta2), b)  # B − B0 off its geared direction
         return {
             "crank1": _link_error(motion, "A0", "A", self.crank1) / s,
@@ -357,8 +355,12 @@ class DoubleSlider(Mechanism):
         return np.maximum(np.maximum.reduce(sizes), np.abs(self.p + self.q))
 
     def slider_travel(self, theta: ArrayLike) -> Array:
-        """t = |MR| signed along e^{i(α+β)} at the input θ (paper 004, eq. 2)."""
-        return (self.p + self.q) * np.sin(np.asarray(theta) - self.beta) / np.sin(self.alpha)
+        """t = |MR| signed along e^{i(α+β)} at the inputs θ (paper 004, eq. 2; shape
+        ``batch + (samples,)``, like a motion's ``input``)."""
+        pq, beta, alpha = (
+            np.asarray(x)[..., None] for x in (self.p + self.q, self.beta, self.alpha)
+        )
+        return pq * np.sin(np.asarray(theta) - beta) / np.sin(alpha)
 
     def residuals(self, motion: Motion) -> dict[str, Array]:
         s = np.asarray(self.scale)[..., None]

@@ -116,10 +116,8 @@ def _length(motion: Motion, a: str, b: str) -> Array:
 def _frame_error(motion: Motion, step: Rigid, params: dict[str, Array]) -> Array:
     """Distance of a rigid point from its place (u, v) in the frame origin→toward."""
     o, t, p = (motion.positions[k] for k in (step.origin, step.toward, step.name))
-    e = (t - o) / plane.norm(t - o)[..., None]
-    rel = p - o
     u, v = (np.asarray(params[k], dtype=float)[..., None] for k in (step.u, step.v))
-    return np.hypot(plane.dot(rel, e) - u, plane.cross(e, rel) - v)
+    return plane.frame_error(o, t, p, u, v)
 
 
 def _sign_error(name: str, value: Array) -> InvalidMechanism | None:

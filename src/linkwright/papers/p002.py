@@ -39,8 +39,9 @@ DIRECTIONS = {"left": (-1.0, 0.0), "right": (1.0, 0.0), "up": (0.0, 1.0), "down"
 
 @dataclass(frozen=True)
 class StudyStep:
-    """One position of the moved pivot: the offset applied and the five-bar it gives."""
+    """One position of the moved pivot: how many steps, the offset, and the five-bar it gives."""
 
+    steps: int
     offset: tuple[float, float]
     mechanism: GearedFiveBar
     turns_fully: bool
@@ -85,7 +86,7 @@ def pivot_study(
         except InvalidMechanism:
             break  # the crank end has reached the traced point: no link AC is left
         offset = (float(shift[0]) + 0.0, float(shift[1]) + 0.0)
-        out.append(StudyStep(offset, mech, bool(input_range(mech).full)))
+        out.append(StudyStep(k, offset, mech, bool(input_range(mech).full)))
     return out
 
 
@@ -185,8 +186,7 @@ def reproduce(out_dir: str | Path) -> list[Path]:
             f"{float(s.mechanism.link2):.4f} | {s.turns_fully} |"
         )
     for name, s in extremes.items():
-        capped = s.offset == pivot_study(count=MAX_STEPS, direction=DIRECTIONS[name])[-1].offset
-        note = f" (no lock within {MAX_STEPS} steps)" if capped else ""
+        note = f" (no lock within {MAX_STEPS} steps)" if s.steps == MAX_STEPS else ""
         lines.append(
             f"| {labels[name].lower()} (last full turn{note}) | {s.offset} | "
             f"{float(s.mechanism.link1):.4f} | {float(s.mechanism.link2):.4f} | {s.turns_fully} |"
