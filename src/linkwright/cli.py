@@ -249,7 +249,7 @@ def unassembled_reason(mech: Mechanism, theta: float) -> str:
     from linkwright.engine.evaluate import place_all
 
     params = mech.params()
-    _, states = place_all(mech.plan, params, np.array([theta]), points=mech.point_fields, order=0)
+    _, states = place_all(mech.plan, params, np.array([theta]), points=mech.points, order=0)
 
     def value(p: Any) -> float:
         return float(np.asarray(params[p] if isinstance(p, str) else p, dtype=float))

@@ -82,7 +82,7 @@ def circuit_extremum(
     plan = mechanism.plan
     dyad = plan.dyads[0].name
     params = mechanism.params()
-    points = mechanism.point_fields
+    points = mechanism.points
     if motion is None:
         motion = circuit(mechanism, samples)
     values = sign * quantity(motion)

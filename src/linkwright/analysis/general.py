@@ -101,7 +101,7 @@ def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> di
         raise ValueError("a report is on one mechanism; index the batch first")
     plan = mechanism.plan
     arcs = input_range(mechanism)
-    turns = int(input_turns(plan, mechanism.params(), points=mechanism.point_fields))
+    turns = int(input_turns(plan, mechanism.params(), points=mechanism.points))
     dyads = plan.dyads
     report: dict[str, Any] = {
         "family": mechanism.family,

@@ -237,7 +237,7 @@ def _polish_stationary(mechanism, out, value, at, branch, steps: int = 4):
     polished as the root of the first derivative. Extremes that sit at a limit position (not
     stationary) are left alone: there the Newton step is not small.
     """
-    plan, params, points = mechanism.plan, mechanism.params(), mechanism.point_fields
+    plan, params, points = mechanism.plan, mechanism.params(), mechanism.points
     dyad = plan.dyads[0].name
     finite = np.isfinite(at)
     x = np.where(finite, at, 0.0)

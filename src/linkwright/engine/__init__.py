@@ -2,7 +2,18 @@
 
 from linkwright.engine.circuits import InputArcs, NoPeriod, input_arcs, input_turns, trace
 from linkwright.engine.evaluate import Motion, evaluate
-from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, Rigid, Trammel
+from linkwright.engine.plan import (
+    Crank,
+    DyadRRP,
+    DyadRRR,
+    Fixed,
+    Plan,
+    Rigid,
+    SphereCrank,
+    SphereDyad,
+    SphereRigid,
+    Trammel,
+)
 from linkwright.engine.triad import TriadPoses, sweep_roots, triad_poses, triad_rates
 
 __all__ = [
@@ -15,6 +26,9 @@ __all__ = [
     "NoPeriod",
     "Plan",
     "Rigid",
+    "SphereCrank",
+    "SphereDyad",
+    "SphereRigid",
     "Trammel",
     "TriadPoses",
     "evaluate",

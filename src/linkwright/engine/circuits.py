@@ -435,7 +435,8 @@ def input_arcs(
             period if period.ndim else float(period),
         )
     analytic_ok = (
-        len(dyads) == 1
+        plan.space == "plane"
+        and len(dyads) == 1
         and all(_turns_with_input(plan, p, params) for p in dyads[0].parents)
         and np.all(turns == 1)
     )
@@ -610,7 +611,7 @@ def _path_lengths(plan, params, points, seg_start, seg_end, seg_branches) -> Arr
     motion = evaluate(plan, params, flat, points=points, branches=branches, order=0)
     travel = np.zeros(shape)
     for pos in motion.positions.values():
-        p = pos.reshape(shape + (PILOT, 2))
+        p = pos.reshape(shape + (PILOT, pos.shape[-1]))
         step = np.linalg.norm(np.diff(p, axis=-2), axis=-1)
         travel += np.nansum(step, axis=-1)
     travel = np.where(np.isfinite(seg_start), travel, 0.0)
@@ -626,7 +627,7 @@ def _subset(params, points, shape, mask):
     out = {}
     for key, value in params.items():
         a = np.asarray(value, dtype=float)
-        tail = (2,) if key in points else ()
+        tail = a.shape[-1:] if key in points else ()
         out[key] = np.broadcast_to(a, shape + tail)[mask]
     return out
 

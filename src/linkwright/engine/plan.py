@@ -10,7 +10,9 @@ a dyad, closed forms for cranks and rigid points. Nothing here differences numer
 
 Branch convention (one definition for every dyad, see DESIGN.md): a joint P placed from parents
 P1 then P2 has branch ``sign((P2 − P1) × (P − P1))``; a slider pin B placed on a line from P1 has
-branch ``sign((B − H)·d)``, H the foot of P1 on the line and d the line's direction.
+branch ``sign((B − H)·d)``, H the foot of P1 on the line and d the line's direction. On the
+sphere (joints are unit vectors, the axes of the revolute joints) a dyad joint X has branch
+``sign((P1 × P2)·X)``.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from linkwright.geometry import plane
+from linkwright.geometry import plane, sphere
 
 __all__ = [
     "Crank",
@@ -32,6 +34,9 @@ __all__ = [
     "Param",
     "Plan",
     "Rigid",
+    "SphereCrank",
+    "SphereDyad",
+    "SphereRigid",
     "Step",
     "Trammel",
 ]
@@ -108,7 +113,8 @@ def _combine(*states: JointState) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]
 
 @dataclass(frozen=True)
 class Fixed:
-    """A ground pivot at the point parameter ``at``."""
+    """A ground pivot at the point parameter ``at``: a point in the plane, a unit vector (the
+    joint's axis) on the sphere."""
 
     name: str
     at: str
@@ -118,9 +124,11 @@ class Fixed:
         return ()
 
     def place(self, ctx: Context) -> JointState:
-        pos = np.broadcast_to(ctx.point(self.at), ctx.theta.shape + (2,))
+        at = ctx.point(self.at)
+        # A point [x, y] in the plane, a unit vector [x, y, z] on the sphere.
+        pos = np.broadcast_to(at, ctx.theta.shape + at.shape[-1:])
         true = np.ones(ctx.theta.shape, dtype=bool)
-        zeros = np.zeros(ctx.theta.shape + (2,)) if ctx.order else None
+        zeros = np.zeros(pos.shape) if ctx.order else None
         return JointState(pos, zeros, zeros, true, true)
 
 
@@ -351,6 +359,173 @@ class Trammel:
         return JointState(pos, vel, acc, valid, regular)
 
 
+@dataclass(frozen=True)
+class SphereCrank:
+    """A joint at arc ``length`` from the fixed axis ``pivot``, turned by ``phase + ratio·θ``.
+
+    The angle is measured about +O·pivot (right-handed) from the great circle that runs from
+    the pivot towards the vector parameter ``ref`` (only its part normal to the pivot counts).
+    Paper 000's crank: pivot A0 = (1, 0, 0), ref +y, A = (cos a2, sin a2 cos θ, sin a2 sin θ).
+    The pivot must be a ground joint (:class:`Fixed`); the plan checks it.
+    """
+
+    name: str
+    pivot: str
+    length: Param
+    ref: str
+    ratio: Param = 1.0
+    phase: Param = 0.0
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.pivot,)
+
+    def place(self, ctx: Context) -> JointState:
+        o = ctx.joint(self.pivot)
+        e1 = sphere.tangent(o.pos, ctx.point(self.ref))
+        e2 = sphere.cross(o.pos, e1)
+        length = ctx.scalar(self.length)
+        k = ctx.scalar(self.ratio)
+        phi = ctx.scalar(self.phase) + k * ctx.theta
+        c, s = np.cos(phi)[..., None], np.sin(phi)[..., None]
+        radius = np.sin(length)[..., None]
+        pos = np.cos(length)[..., None] * o.pos + radius * (c * e1 + s * e2)
+        valid = o.valid & np.isfinite(pos).all(axis=-1)
+        pos = np.where(valid[..., None], pos, np.nan)
+        vel = acc = None
+        if ctx.order >= 1:
+            vel = np.asarray(k)[..., None] * radius * (c * e2 - s * e1)
+        if ctx.order >= 2:
+            acc = -(np.asarray(k)[..., None] ** 2) * radius * (c * e1 + s * e2)
+        regular = valid & o.regular
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular)
+
+
+@dataclass(frozen=True)
+class SphereDyad:
+    """The joint of two binary spherical links: the small circle of arc ``r1`` about ``p1``
+    meets the small circle of arc ``r2`` about ``p2``, on branch ``sign((P1 × P2)·X)``.
+
+    With d the arc P1P2 and φ the angle at P1 between the great circles P1→P2 and P1→X
+    (spherical triangle P1 P2 X with sides d, r1, r2)::
+
+        sin φ · sin r1 sin d = ±√G,   cos φ · sin r1 sin d = cos r2 − cos r1 cos d,
+
+    G the Gram determinant of the three unit vectors (:func:`linkwright.geometry.sphere.gram`),
+    taken in product form so that it is accurate at a limit position. The margin is
+    ``sin² φ = G / (sin² d sin² r1)``, 0 at a limit position, as in the plane. Velocities and
+    accelerations solve the differentiated constraints X·P1 = cos r1, X·P2 = cos r2, X·X = 1
+    (a 3×3 system with rows P1, P2, X).
+    """
+
+    name: str
+    p1: str
+    r1: Param
+    p2: str
+    r2: Param
+    branch: str = "assembly"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.p1, self.p2)
+
+    def place(self, ctx: Context) -> JointState:
+        j1, j2 = ctx.joint(self.p1), ctx.joint(self.p2)
+        r1, r2 = ctx.scalar(self.r1), ctx.scalar(self.r2)
+        sign = ctx.branch(self.name, self.branch)
+        p1, p2 = j1.pos, j2.pos
+        w = sphere.cross(p1, p2)
+        sin_d = sphere.norm(w)
+        cos_d = sphere.dot(p1, p2)
+        d = np.arctan2(sin_d, cos_d)
+        g = sphere.gram(d, r1, r2)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            margin = g / (sin_d * np.sin(r1)) ** 2
+            t = (p2 - cos_d[..., None] * p1) / sin_d[..., None]
+            n = w / sin_d[..., None]
+        phi = np.arctan2(sign * np.sqrt(np.clip(g, 0.0, None)), np.cos(r2) - np.cos(r1) * cos_d)
+        pos = np.cos(r1)[..., None] * p1 + np.sin(r1)[..., None] * (
+            np.cos(phi)[..., None] * t + np.sin(phi)[..., None] * n
+        )
+        valid = j1.valid & j2.valid & (margin >= -ASSEMBLY_TOL) & (sin_d > 0)
+        pos = np.where(valid[..., None], pos, np.nan)
+        # sin of the angle at X between its two links: 0 at a limit (toggle) position.
+        det_rel = sphere.dot(pos, w) / (np.sin(r1) * np.sin(r2))
+        regular = valid & j1.regular & j2.regular & (np.abs(det_rel) > SINGULAR_SIN)
+        regular &= margin > SINGULAR_MARGIN
+        vel = acc = None
+        zero = np.zeros(pos.shape[:-1])
+        if ctx.order >= 1:
+            vel, _ = sphere.solve_3x3_rows(
+                p1, p2, pos, -sphere.dot(pos, j1.vel), -sphere.dot(pos, j2.vel), zero
+            )
+        if ctx.order >= 2:
+            acc, _ = sphere.solve_3x3_rows(
+                p1,
+                p2,
+                pos,
+                -2.0 * sphere.dot(vel, j1.vel) - sphere.dot(pos, j1.acc),
+                -2.0 * sphere.dot(vel, j2.vel) - sphere.dot(pos, j2.acc),
+                -sphere.dot(vel, vel),
+            )
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
+
+
+@dataclass(frozen=True)
+class SphereRigid:
+    """A point fixed on the spherical link ``origin``→``toward``: at arc ``length`` from the
+    origin, at ``angle`` from the great circle origin→toward, right-handed about +O·origin.
+
+    Paper 000's coupler point C (arc AC, μ = BAC, its matrix T of eq. 6 and walk along AC). In
+    the link's own basis X = a·O + b·T + c·(O × T), with constant a, b, c because O·T is
+    constant on a rigid link; positions and both derivatives follow without any solve.
+    """
+
+    name: str
+    origin: str
+    toward: str
+    length: Param
+    angle: Param
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.origin, self.toward)
+
+    def place(self, ctx: Context) -> JointState:
+        jo, jt = ctx.joint(self.origin), ctx.joint(self.toward)
+        length, angle = ctx.scalar(self.length), ctx.scalar(self.angle)
+        o, t = jo.pos, jt.pos
+        ot = sphere.cross(o, t)
+        cos_ot, sin_ot = sphere.dot(o, t), sphere.norm(ot)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            b = np.sin(length) * np.cos(angle) / sin_ot
+            c = np.sin(length) * np.sin(angle) / sin_ot
+        a = np.cos(length) - b * cos_ot
+        a, b, c = a[..., None], b[..., None], c[..., None]
+        valid, regular = _combine(jo, jt)
+        valid = valid & (sin_ot > 0)
+        pos = np.where(valid[..., None], a * o + b * t + c * ot, np.nan)
+        vel = acc = None
+        if ctx.order >= 1:
+            vel = a * jo.vel + b * jt.vel + c * (sphere.cross(jo.vel, t) + sphere.cross(o, jt.vel))
+        if ctx.order >= 2:
+            acc = (
+                a * jo.acc
+                + b * jt.acc
+                + c
+                * (
+                    sphere.cross(jo.acc, t)
+                    + 2.0 * sphere.cross(jo.vel, jt.vel)
+                    + sphere.cross(o, jt.acc)
+                )
+            )
+        regular = regular & valid
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular)
+
+
 def _direction(angle: Array) -> Array:
     return np.stack(np.broadcast_arrays(np.cos(angle), np.sin(angle)), axis=-1)
 
@@ -366,7 +541,9 @@ def _mask_derivatives(
     return vel, acc
 
 
-DYAD_TYPES = (DyadRRR, DyadRRP)
+DYAD_TYPES = (DyadRRR, DyadRRP, SphereDyad)
+PLANE_STEPS = (Crank, DyadRRR, DyadRRP, Rigid, Trammel)
+SPHERE_STEPS = (SphereCrank, SphereDyad, SphereRigid)
 
 
 @dataclass(frozen=True)
@@ -394,6 +571,21 @@ class Plan:
         for name in self.traced:
             if name not in known:
                 raise ValueError(f"traced joint {name!r} is not placed by the plan")
+        if any(isinstance(s, PLANE_STEPS) for s in self.steps) and any(
+            isinstance(s, SPHERE_STEPS) for s in self.steps
+        ):
+            raise ValueError("a plan places its joints either in the plane or on the sphere")
+        for step in self.steps:
+            if isinstance(step, SphereCrank) and not isinstance(self.step(step.pivot), Fixed):
+                raise ValueError(
+                    f"spherical crank {step.name!r} turns about {step.pivot!r}, "
+                    "which is not a ground pivot"
+                )
+
+    @property
+    def space(self) -> str:
+        """``"sphere"`` for a plan of spherical steps, else ``"plane"``."""
+        return "sphere" if any(isinstance(s, SPHERE_STEPS) for s in self.steps) else "plane"
 
     @property
     def joints(self) -> tuple[str, ...]:

@@ -20,6 +20,11 @@ from linkwright.mechanisms.linkage import (
 )
 from linkwright.mechanisms.planar import DoubleSlider, FourBar, GearedFiveBar, SliderCrank
 from linkwright.mechanisms.sixbar import Stephenson1, Stephenson3, Watt1, Watt2
+from linkwright.mechanisms.spherical import (
+    SphericalFourBar,
+    SphericalSixBar,
+    SphericalStephenson3,
+)
 
 FAMILIES: dict[str, type[Mechanism]] = {
     cls.family: cls
@@ -33,6 +38,9 @@ FAMILIES: dict[str, type[Mechanism]] = {
         Stephenson1,
         Stephenson3,
         Linkage,
+        SphericalFourBar,
+        SphericalSixBar,
+        SphericalStephenson3,
     )
 }
 
@@ -52,6 +60,9 @@ __all__ = [
     "RigidJoint",
     "SliderCrank",
     "SliderJoint",
+    "SphericalFourBar",
+    "SphericalSixBar",
+    "SphericalStephenson3",
     "Stephenson1",
     "Stephenson3",
     "Watt1",

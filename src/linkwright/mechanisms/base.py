@@ -9,7 +9,7 @@ assembly choice.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
 import numpy as np
@@ -41,6 +41,10 @@ class Mechanism:
     plan: ClassVar[Plan]
     point_fields: ClassVar[frozenset[str]] = frozenset()
     length_fields: ClassVar[tuple[str, ...]] = ()
+    arc_fields: ClassVar[tuple[str, ...]] = ()
+    """Spherical link lengths (central angles, radians), each strictly between 0 and π."""
+    derived_points: ClassVar[frozenset[str]] = frozenset()
+    """Point (or unit-vector) parameters that :meth:`params` adds beyond the fields."""
     reported_joints: ClassVar[tuple[str, ...]] = ()
     traced_joint: ClassVar[str] = "P"
 
@@ -53,6 +57,12 @@ class Mechanism:
                 raise InvalidMechanism(f"{f.name}: must be finite, got {_show(value)}")
             if f.name in self.length_fields and np.any(value <= 0):
                 raise InvalidMechanism(f"{f.name}: must be a positive length, got {_show(value)}")
+            if f.name in self.arc_fields and np.any((value <= 0) | (value >= np.pi)):
+                bad = value[(value <= 0) | (value >= np.pi)]
+                raise InvalidMechanism(
+                    f"{f.name}: a spherical link's arc must lie strictly between 0° and 180°, "
+                    f"got {np.degrees(bad).ravel()[:3].round(9).tolist()}°"
+                )
             if f.name == "assembly" and not np.all(np.abs(value) == 1):
                 raise InvalidMechanism(f"assembly: must be 1 or -1, got {_show(value)}")
             object.__setattr__(self, f.name, value)
@@ -66,8 +76,18 @@ class Mechanism:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
     @property
+    def points(self) -> frozenset[str]:
+        """The names of the plan parameters that are points (or unit vectors), not scalars."""
+        return self.point_fields | self.derived_points
+
+    @property
+    def space(self) -> str:
+        """``"plane"`` or ``"sphere"``: where the plan places the joints."""
+        return self.plan.space
+
+    @property
     def batch_shape(self) -> tuple[int, ...]:
-        return batch_shape(self.params(), self.point_fields)
+        return batch_shape(self.params(), self.points)
 
     @property
     def scale(self) -> Array:
@@ -76,7 +96,7 @@ class Mechanism:
         return np.maximum.reduce(np.broadcast_arrays(*lengths)) if lengths else np.float64(1.0)
 
     def with_assembly(self, assembly: ArrayLike) -> Mechanism:
-        return type(self)(**{**self.params(), "assembly": assembly})
+        return replace(self, assembly=assembly)
 
 
 def _show(value: NDArray) -> str:
@@ -109,7 +129,7 @@ def solve(mechanism: Mechanism, inputs: ArrayLike, *, order: int = 2) -> Motion:
     (array([False]), array([[nan, nan]]))
     """
     return evaluate(
-        mechanism.plan, mechanism.params(), inputs, points=mechanism.point_fields, order=order
+        mechanism.plan, mechanism.params(), inputs, points=mechanism.points, order=order
     )
 
 
@@ -129,7 +149,7 @@ def configurations(
             mechanism.plan,
             mechanism.params(),
             inputs,
-            points=mechanism.point_fields,
+            points=mechanism.points,
             branches=branches,
             order=order,
         )
@@ -166,7 +186,7 @@ def circuit(
         mechanism.plan,
         mechanism.params(),
         samples,
-        points=mechanism.point_fields,
+        points=mechanism.points,
         order=order,
         circuit=circuit,
     )
@@ -175,5 +195,5 @@ def circuit(
 def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:
     """The admissible input arcs (limit positions as exact roots) of each mechanism."""
     return input_arcs(
-        mechanism.plan, mechanism.params(), points=mechanism.point_fields, method=method
+        mechanism.plan, mechanism.params(), points=mechanism.points, method=method
     )

@@ -216,7 +216,7 @@ def _pose(mechanism: Mechanism, theta: float, motion: Motion | None) -> Motion:
         mechanism.plan,
         mechanism.params(),
         np.array([theta]),
-        points=mechanism.point_fields,
+        points=mechanism.points,
         branches=branches,
         order=1,
     )

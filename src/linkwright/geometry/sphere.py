@@ -1,0 +1,195 @@
+"""Spherical primitives: the few operations the engine's sphere steps are built from.
+
+Points on the unit sphere are unit vectors (the axes of a spherical linkage's revolute joints,
+all through the sphere's centre O); a link is a great-circle arc measured by its central angle.
+Every function broadcasts over leading axes, so one call handles a batch of mechanisms times a
+batch of input samples, like :mod:`linkwright.geometry.plane`.
+
+Angles about a point X are right-handed about +OX: looking at the sphere from outside, above X,
+they turn counter-clockwise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "angle_at",
+    "arc",
+    "cross",
+    "dot",
+    "frame_error",
+    "gram",
+    "norm",
+    "point_at",
+    "rotate",
+    "solve_3x3_rows",
+    "tangent",
+    "unit",
+]
+
+Array = NDArray[np.float64]
+
+
+def dot(a: Array, b: Array) -> Array:
+    """Dot product over the last axis.
+
+    >>> dot(np.array([1.0, 2.0, 3.0]), np.array([4.0, 5.0, 6.0]))
+    np.float64(32.0)
+    """
+    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
+
+
+def cross(a: Array, b: Array) -> Array:
+    """Cross product over the last axis (batched).
+
+    >>> cross(np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    array([0., 0., 1.])
+    """
+    a, b = np.broadcast_arrays(a, b)
+    out = np.empty(a.shape, dtype=np.result_type(a, b, float))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+def norm(a: Array) -> Array:
+    """Euclidean length over the last axis.
+
+    >>> norm(np.array([2.0, 3.0, 6.0]))
+    np.float64(7.0)
+    """
+    return np.sqrt(dot(a, a))
+
+
+def unit(a: ArrayLike) -> Array:
+    """``a`` scaled to length 1 (NaN for the zero vector).
+
+    >>> unit([0.0, 3.0, 4.0])
+    array([0. , 0.6, 0.8])
+    """
+    a = np.asarray(a, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return a / norm(a)[..., None]
+
+
+def arc(a: Array, b: Array) -> Array:
+    """Central angle between unit vectors (radians, in [0, π]), accurate at 0 and π alike.
+
+    >>> float(np.degrees(arc(np.array([1.0, 0, 0]), np.array([0.0, 1, 0]))))
+    90.0
+    """
+    return np.arctan2(norm(cross(a, b)), dot(a, b))
+
+
+def tangent(at: Array, toward: Array) -> Array:
+    """Unit tangent at ``at`` along the great circle towards ``toward``.
+
+    NaN where the two are equal or antipodal (no great circle is singled out).
+
+    >>> tangent(np.array([0.0, 0, 1]), np.array([1.0, 0, 1]) / 2**0.5).round(12)
+    array([1., 0., 0.])
+    """
+    return unit(toward - dot(toward, at)[..., None] * at)
+
+
+def rotate(v: Array, axis: Array, angle: ArrayLike) -> Array:
+    """``v`` turned by ``angle`` right-handed about the unit ``axis`` (Rodrigues' formula).
+
+    This is paper 000's matrix T (eq. 6) applied to a vector.
+
+    >>> rotate(np.array([0.0, 1, 0]), np.array([1.0, 0, 0]), np.pi / 2).round(12)
+    array([0., 0., 1.])
+    """
+    angle = np.asarray(angle, dtype=float)[..., None]
+    c, s = np.cos(angle), np.sin(angle)
+    return v * c + cross(axis, v) * s + axis * dot(axis, v)[..., None] * (1.0 - c)
+
+
+def point_at(origin: Array, toward: Array, length: ArrayLike, angle: ArrayLike) -> Array:
+    """The point at arc ``length`` from ``origin``, at ``angle`` from the great circle
+    origin→toward (right-handed about +O·origin).
+
+    How a rigid point sits on a spherical link: paper 000's coupler point C (arc AC, μ = BAC),
+    computed by rotating the great circle A→B about OA by μ and walking the arc AC from A.
+
+    >>> a, b = np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
+    >>> point_at(a, b, np.pi / 2, np.pi / 2).round(12)
+    array([0., 0., 1.])
+    """
+    length = np.asarray(length, dtype=float)[..., None]
+    angle = np.asarray(angle, dtype=float)[..., None]
+    t = tangent(origin, toward)
+    n = cross(origin, t)
+    return np.cos(length) * origin + np.sin(length) * (np.cos(angle) * t + np.sin(angle) * n)
+
+
+def angle_at(at: Array, a: Array, b: Array) -> Array:
+    """The angle at ``at`` from the great circle at→a to at→b, right-handed about +O·at.
+
+    In (−π, π]. Inverse of :func:`point_at`: ``angle_at(o, t, point_at(o, t, l, x)) == x``.
+
+    >>> o, a, b = np.array([0.0, 0, 1]), np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
+    >>> float(np.degrees(angle_at(o, a, b)))
+    90.0
+    """
+    ta, tb = tangent(at, a), tangent(at, b)
+    return np.arctan2(dot(at, cross(ta, tb)), dot(ta, tb))
+
+
+def gram(x: ArrayLike, y: ArrayLike, z: ArrayLike) -> Array:
+    """Gram determinant of three unit vectors whose pairwise arcs are x, y, z.
+
+    ``1 − cos²x − cos²y − cos²z + 2 cos x cos y cos z``, evaluated as the product
+    ``4 sin s sin(s − x) sin(s − y) sin(s − z)`` with s = (x + y + z)/2, so that it is accurate
+    near each of its roots: where three arcs just close into a (degenerate) spherical triangle,
+    i.e. at a dyad's limit position. It is the squared volume of the three vectors, ≥ 0 exactly
+    when such a triangle exists.
+
+    >>> x, y, z = np.radians([50.0, 60.0, 70.0])
+    >>> c = np.cos([x, y, z])
+    >>> bool(np.isclose(gram(x, y, z), 1 - (c**2).sum() + 2 * c.prod()))
+    True
+    >>> float(gram(0.5, 0.25, 0.25))  # a degenerate triangle: 0.5 = 0.25 + 0.25
+    0.0
+    """
+    x, y, z = (np.asarray(v, dtype=float) for v in (x, y, z))
+    s = 0.5 * (x + y + z)
+    return 4.0 * np.sin(s) * np.sin(s - x) * np.sin(s - y) * np.sin(s - z)
+
+
+def solve_3x3_rows(
+    row1: Array, row2: Array, row3: Array, rhs1: Array, rhs2: Array, rhs3: Array
+) -> tuple[Array, Array]:
+    """Solve ``[row1; row2; row3] · x = [rhs1; rhs2; rhs3]`` by Cramer's rule, batched.
+
+    Returns ``(x, det)``; ``x`` is inf/NaN where ``det`` is zero (a singular position): the
+    caller masks those samples.
+
+    >>> rows = np.eye(3) * 2.0
+    >>> solve_3x3_rows(rows[0], rows[1], rows[2], 2.0, 4.0, 6.0)
+    (array([1., 2., 3.]), np.float64(8.0))
+    """
+    c23, c31, c12 = cross(row2, row3), cross(row3, row1), cross(row1, row2)
+    det = dot(row1, c23)
+    rhs1, rhs2, rhs3 = (np.asarray(r, dtype=float)[..., None] for r in (rhs1, rhs2, rhs3))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (rhs1 * c23 + rhs2 * c31 + rhs3 * c12) / det[..., None]
+    return x, det
+
+
+def frame_error(
+    origin: Array, toward: Array, point: Array, length: ArrayLike, angle: ArrayLike
+) -> Array:
+    """How far (chord length) ``point`` is from its place on the link origin→toward.
+
+    The residual of a rigid point on a spherical link, the sphere's
+    :func:`linkwright.geometry.plane.frame_error`.
+
+    >>> a, b = np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
+    >>> float(frame_error(a, b, np.array([0.0, 0, 1]), np.pi / 2, np.pi / 2)) < 1e-15
+    True
+    """
+    return norm(point - point_at(origin, toward, length, angle))

@@ -1,0 +1,373 @@
+"""Spherical named families: the four-bar of papers 000 and 003, paper 000's six-bar (Fig. 8) and
+the Stephenson-III six-bar of paper 001.
+
+Every joint of a spherical linkage is a revolute whose axis passes through the centre O of the
+unit sphere; a joint is reported as the unit vector along its axis, a link's length as the
+central angle (arc) between its joints' axes, in radians inside the library (documents and the
+command line speak degrees). Angles about a joint X are right-handed about +OX.
+
+Frames and letters follow the papers:
+
+- four-bar (paper 000, Figs 1, 6, 7): A0 = (1, 0, 0), B0 = (cos a1, sin a1, 0),
+  A = (cos a2, sin a2 cos θ, sin a2 sin θ); B on the coupler AB and the rocker B0B; coupler
+  point P at arc AP from A and angle BAP about +OA (paper 000's C with AC and μ).
+- six-bar (paper 000, Fig. 8): that four-bar with P called C, a ground pivot E0 at arc B0E0 from
+  B0 and angle ε from the frame circle beyond B0, the binary links CE and E0E, and the traced
+  point D on CE (arc CD, angle ECD about +OC).
+- Stephenson III (paper 001): A = (0, 0, 1), D = (0, sin a1, cos a1), G on the great circle
+  A→D at arc a1 + a9 from A (beyond D; the printed eq. 8 has G on the wrong side of A); input AB
+  with B = (sin a2 sin θ1, sin a2 cos θ1, cos a2) (eq. 5, θ1 = angle BAD); C on BC and CD; E on
+  the ternary coupler BCE; F on EF and FG.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from linkwright.engine import Fixed, Motion, Plan, SphereCrank, SphereDyad, SphereRigid
+from linkwright.geometry import sphere
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism
+from linkwright.mechanisms.sixbar import NoConstructionPlan
+
+__all__ = ["SphericalFourBar", "SphericalSixBar", "SphericalStephenson3"]
+
+Array = NDArray[np.float64]
+_X = np.array([1.0, 0.0, 0.0])
+_Y = np.array([0.0, 1.0, 0.0])
+_Z = np.array([0.0, 0.0, 1.0])
+
+
+def _on_equator(angle: ArrayLike) -> Array:
+    a = np.asarray(angle, dtype=float)
+    return np.stack(np.broadcast_arrays(np.cos(a), np.sin(a), np.zeros_like(a)), axis=-1)
+
+
+def _arc_error(motion: Motion, a: str, b: str, length: ArrayLike) -> Array:
+    """Arc between two joints minus its length (radians)."""
+    return sphere.arc(motion.positions[a], motion.positions[b]) - np.asarray(length)[..., None]
+
+
+def _point_error(motion: Motion, origin: str, toward: str, point: str, arc, angle) -> Array:
+    o, t, p = (motion.positions[k] for k in (origin, toward, point))
+    return sphere.frame_error(o, t, p, np.asarray(arc)[..., None], np.asarray(angle)[..., None])
+
+
+def _unit_error(motion: Motion) -> Array:
+    """Largest departure of any joint from the unit sphere."""
+    errs = [np.abs(sphere.norm(p) - 1.0) for p in motion.positions.values()]
+    return np.maximum.reduce(errs)
+
+
+@dataclass(frozen=True)
+class SphericalFourBar(Mechanism):
+    """Spherical four-bar in paper 000's frame: frame A0B0 (a1), crank A0A (a2), coupler AB (a3),
+    rocker B0B (a4), coupler point P; all arcs in radians.
+
+    Joints (unit vectors): A0 = (1, 0, 0), B0 = (cos a1, sin a1, 0), A = (cos a2, sin a2 cos θ,
+    sin a2 sin θ) for the input θ (measured about +OA0 from the frame circle towards B0, so it is
+    paper 003's φ1), B, and P at arc ``point_arc`` from A and angle ``point_angle`` = BAP about
+    +OA (paper 000's AC and μ). ``assembly`` is the sign of (A × B0)·B; +1 is the mode that
+    paper 000's eq. 5 gives as printed.
+
+    Paper 003 names the same links α1 (crank), α2 (coupler), α3 (output), α4 (frame).
+
+    Examples
+    --------
+    Paper 000's Fig. 6 crank-rocker (a1..a4 = 40°, 20°, 45°, 35°; AC = 50°, μ = 130°):
+
+    >>> from linkwright.mechanisms import solve
+    >>> fig6 = SphericalFourBar(*np.radians([40, 20, 45, 35, 50, 130]))
+    >>> m = solve(fig6, [0.0])
+    >>> np.round(m.positions["B"], 6)
+    array([[0.509774, 0.666849, 0.543546]])
+
+    A linkage that cannot assemble gives NaN, masked by ``valid``:
+
+    >>> m = solve(SphericalFourBar(*np.radians([90, 10, 20, 30])), [0.0])
+    >>> m.valid, m.positions["B"]
+    (array([False]), array([[nan, nan, nan]]))
+    """
+
+    frame: ArrayLike
+    crank: ArrayLike
+    coupler: ArrayLike
+    rocker: ArrayLike
+    point_arc: ArrayLike = 0.0
+    point_angle: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+
+    family: ClassVar[str] = "spherical-fourbar"
+    arc_fields: ClassVar[tuple[str, ...]] = ("frame", "crank", "coupler", "rocker")
+    derived_points: ClassVar[frozenset[str]] = frozenset({"A0", "B0", "ref"})
+    reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "A", "B", "P")
+    plan: ClassVar[Plan] = Plan(
+        (
+            Fixed("A0", "A0"),
+            Fixed("B0", "B0"),
+            SphereCrank("A", "A0", "crank", ref="ref"),
+            SphereDyad("B", "A", "coupler", "B0", "rocker", branch="assembly"),
+            SphereRigid("P", "A", "B", "point_arc", "point_angle"),
+        ),
+        traced=("P",),
+    )
+
+    def params(self) -> dict[str, Array]:
+        out = super().params()
+        out.update(A0=_X, B0=_on_equator(self.frame), ref=_Y)
+        return out
+
+    @property
+    def scale(self) -> Array:
+        return np.float64(1.0)
+
+    def output_angle(self, motion: Motion) -> Array:
+        """φ3: the angle of B about +OB0 from the frame circle beyond B0 (paper 000's θ4)."""
+        b0 = motion.positions["B0"]
+        beyond = -sphere.tangent(b0, motion.positions["A0"])
+        return sphere.angle_at(b0, b0 + beyond, motion.positions["B"])
+
+    def residuals(self, motion: Motion) -> dict[str, Array]:
+        """Each constraint's error (radians of arc, or chord for the point) at every sample."""
+        return {
+            "crank": _arc_error(motion, "A0", "A", self.crank),
+            "coupler": _arc_error(motion, "A", "B", self.coupler),
+            "rocker": _arc_error(motion, "B0", "B", self.rocker),
+            "point": _point_error(motion, "A", "B", "P", self.point_arc, self.point_angle),
+            "unit": _unit_error(motion),
+        }
+
+
+@dataclass(frozen=True)
+class SphericalSixBar(Mechanism):
+    """Paper 000's spherical six-bar (Fig. 8): its four-bar, the binary links CE (``link5``) and
+    E0E (``link6``), and the point D on CE; all arcs in radians.
+
+    The four-bar is :class:`SphericalFourBar` with its coupler point called C (``point_arc`` = AC,
+    ``point_angle`` = μ = BAC). The ground pivot E0 lies at arc ``ground_arc`` (B0E0) from B0,
+    at angle ``ground_angle`` (ε = E0B0K) about +OB0 from the frame circle beyond B0 (K on the
+    frame circle beyond B0, the side that continues A0→B0). D is at arc ``d_arc`` (CD) from C,
+    at angle ``d_angle`` (ECD) about +OC from C→E. ``assembly`` is the four-bar's sign
+    (A × B0)·B, ``assembly2`` the sign (C × E0)·E. Joints: A0, B0, E0, A, B, C, E, D; traced C
+    and D.
+
+    Paper 000 prints neither ε's sense nor the assembly modes. With ε right-handed about +OB0,
+    as everywhere in linkwright, Fig. 8's linkage turns its crank fully only for ε = −30° and
+    the four-bar's mode ``assembly = -1`` (either ``assembly2``); the other three choices of
+    (sign of ε, assembly) make the crank a rocker (``linkwright papers 000`` shows all four).
+    Its mirror image in the frame plane (every angle and sign negated) is the same motion.
+    """
+
+    frame: ArrayLike
+    crank: ArrayLike
+    coupler: ArrayLike
+    rocker: ArrayLike
+    point_arc: ArrayLike
+    point_angle: ArrayLike
+    link5: ArrayLike
+    link6: ArrayLike
+    ground_arc: ArrayLike
+    ground_angle: ArrayLike
+    d_arc: ArrayLike = 0.0
+    d_angle: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+    assembly2: ArrayLike = 1.0
+
+    family: ClassVar[str] = "spherical-sixbar"
+    arc_fields: ClassVar[tuple[str, ...]] = (
+        "frame",
+        "crank",
+        "coupler",
+        "rocker",
+        "link5",
+        "link6",
+        "ground_arc",
+    )
+    derived_points: ClassVar[frozenset[str]] = frozenset({"A0", "B0", "E0", "ref"})
+    reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "E0", "A", "B", "C", "E", "D")
+    traced_joint: ClassVar[str] = "D"
+    plan: ClassVar[Plan] = Plan(
+        (
+            Fixed("A0", "A0"),
+            Fixed("B0", "B0"),
+            Fixed("E0", "E0"),
+            SphereCrank("A", "A0", "crank", ref="ref"),
+            SphereDyad("B", "A", "coupler", "B0", "rocker", branch="assembly"),
+            SphereRigid("C", "A", "B", "point_arc", "point_angle"),
+            SphereDyad("E", "C", "link5", "E0", "link6", branch="assembly2"),
+            SphereRigid("D", "C", "E", "d_arc", "d_angle"),
+        ),
+        traced=("D", "C"),
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        for name in ("assembly2",):
+            value = np.asarray(getattr(self, name))
+            if not np.all(np.abs(value) == 1):
+                raise InvalidMechanism(f"{name}: must be 1 or -1, got {value.ravel()[:3]}")
+
+    def params(self) -> dict[str, Array]:
+        out = super().params()
+        b0 = _on_equator(self.frame)
+        beyond = _on_equator(np.asarray(self.frame) + np.pi / 2)  # the frame circle past B0
+        out.update(
+            A0=_X,
+            B0=b0,
+            E0=sphere.point_at(b0, b0 + beyond, self.ground_arc, self.ground_angle),
+            ref=_Y,
+        )
+        return out
+
+    @property
+    def scale(self) -> Array:
+        return np.float64(1.0)
+
+    def residuals(self, motion: Motion) -> dict[str, Array]:
+        """Each constraint's error (radians of arc, or chord for rigid points) at every sample."""
+        return {
+            "crank": _arc_error(motion, "A0", "A", self.crank),
+            "coupler": _arc_error(motion, "A", "B", self.coupler),
+            "rocker": _arc_error(motion, "B0", "B", self.rocker),
+            "C": _point_error(motion, "A", "B", "C", self.point_arc, self.point_angle),
+            "link5": _arc_error(motion, "C", "E", self.link5),
+            "link6": _arc_error(motion, "E0", "E", self.link6),
+            "D": _point_error(motion, "C", "E", "D", self.d_arc, self.d_angle),
+            "unit": _unit_error(motion),
+        }
+
+
+class _InputABPlan:
+    """The family's plan on the class and on AB-driven instances; an error for input FG."""
+
+    def __init__(self, plan: Plan) -> None:
+        self._plan = plan
+
+    def __get__(self, obj, owner=None) -> Plan:
+        if obj is None or getattr(obj, "input", "AB") == "AB":
+            return self._plan
+        raise NoConstructionPlan(
+            "SphericalStephenson3(input='FG') is driven at the output link FG: the coupler BCE, "
+            "held by AB, CD and EF, is a spherical triad with up to 8 configurations, which no "
+            "construction plan places; use solve_all (linkwright solve --all)"
+        )
+
+
+@dataclass(frozen=True)
+class SphericalStephenson3(Mechanism):
+    """The Stephenson-III spherical six-bar of paper 001 (Zong et al.); all arcs in radians.
+
+    Fixed A = (0, 0, 1), D = (0, sin a1, cos a1) and G at arc a1 + a9 from A beyond D; input link
+    AB (a2), ternary coupler BCE (BC = a3, CE = a6, with E placed by turning the great circle
+    C→B about +OC by 180° − σ and walking a6 from C, so that cos BE = cos a3 cos a6 −
+    sin a3 sin a6 cos σ as in eq. 3), output CD (a4), link EF (a7), output FG (a8).
+
+    ``input = "AB"`` drives θ1 = angle BAD with B = (sin a2 sin θ1, sin a2 cos θ1, cos a2)
+    (eq. 5): then the linkage is a four-bar ABCD plus the dyad EFG, with ``assembly`` the sign
+    of (B × D)·C and ``assembly2`` that of (E × G)·F: at most 2 × 2 = 4 real configurations.
+    Paper 001 counts "up to 8" because its system (4) fixes only cos σ and so also admits the
+    mirror-image coupler (σ → −σ), a different mechanism.
+
+    ``input = "FG"`` drives θ6, the angle of F about +OG from the great circle G→(away from D).
+    The coupler is then a triad and has up to 8 real configurations (a degree-8 polynomial):
+    ``plan`` raises :class:`NoConstructionPlan`, and :func:`linkwright.mechanisms.solve_all`
+    finds them all. Joints: A, D, G, B, C, E, F (traced: E).
+    """
+
+    a1: ArrayLike
+    a2: ArrayLike
+    a3: ArrayLike
+    a4: ArrayLike
+    a6: ArrayLike
+    sigma: ArrayLike
+    a7: ArrayLike
+    a8: ArrayLike
+    a9: ArrayLike
+    assembly: ArrayLike = 1.0
+    assembly2: ArrayLike = 1.0
+    input: str = "AB"
+
+    family: ClassVar[str] = "spherical-stephenson3"
+    arc_fields: ClassVar[tuple[str, ...]] = ("a1", "a2", "a3", "a4", "a6", "a7", "a8", "a9")
+    derived_points: ClassVar[frozenset[str]] = frozenset({"A", "D", "G", "away"})
+    reported_joints: ClassVar[tuple[str, ...]] = ("A", "D", "G", "B", "C", "E", "F")
+    traced_joint: ClassVar[str] = "E"
+    plan: ClassVar[Plan] = _InputABPlan(  # type: ignore[assignment]
+        Plan(
+            (
+                Fixed("A", "A"),
+                Fixed("D", "D"),
+                Fixed("G", "G"),
+                # Eq. 5 turns B from D towards +x: left-handed about +OA, hence ratio −1.
+                SphereCrank("B", "A", "a2", ref="D", ratio=-1.0),
+                SphereDyad("C", "B", "a3", "D", "a4", branch="assembly"),
+                SphereRigid("E", "C", "B", "a6", "turn"),
+                SphereDyad("F", "E", "a7", "G", "a8", branch="assembly2"),
+            ),
+            traced=("E", "F"),
+        )
+    )
+
+    def __post_init__(self) -> None:
+        choice = self.input
+        if choice not in ("AB", "FG"):
+            raise InvalidMechanism(f"input: must be 'AB' or 'FG', got {choice!r}")
+        # The base class validates numeric fields; `input` is a word.
+        object.__setattr__(self, "input", 0.0)
+        try:
+            super().__post_init__()
+            value = np.asarray(self.assembly2)
+            if not np.all(np.abs(value) == 1):
+                raise InvalidMechanism(f"assembly2: must be 1 or -1, got {value.ravel()[:3]}")
+            if np.any(np.asarray(self.a1) + np.asarray(self.a9) >= 2 * np.pi):
+                raise InvalidMechanism("a1 + a9: G would wrap past A (a1 + a9 ≥ 360°)")
+        finally:
+            object.__setattr__(self, "input", str(choice))
+
+    def params(self) -> dict[str, Array]:
+        out = {
+            k: v
+            for k, v in super().params().items()
+            if k != "input"  # a word, not a plan parameter
+        }
+        a1 = np.asarray(self.a1, dtype=float)
+        far = a1 + np.asarray(self.a9, dtype=float)
+        zeros = np.zeros_like(a1)
+
+        def on_meridian(angle: Array) -> Array:
+            return np.stack(
+                np.broadcast_arrays(np.zeros_like(angle), np.sin(angle), np.cos(angle)), -1
+            )
+
+        out.update(
+            A=_Z,
+            D=on_meridian(a1),
+            G=on_meridian(far + zeros),
+            away=-on_meridian(a1),
+            turn=np.pi - np.asarray(self.sigma, dtype=float),
+        )
+        return out
+
+    @property
+    def driven(self) -> tuple[str, str]:
+        """(pivot, joint) of the driven link."""
+        return ("A", "B") if self.input == "AB" else ("G", "F")
+
+    @property
+    def scale(self) -> Array:
+        return np.float64(1.0)
+
+    def residuals(self, motion: Motion) -> dict[str, Array]:
+        """Each constraint's error at every sample (radians of arc, or chord for E)."""
+        return {
+            "AB": _arc_error(motion, "A", "B", self.a2),
+            "BC": _arc_error(motion, "B", "C", self.a3),
+            "CD": _arc_error(motion, "C", "D", self.a4),
+            "E": _point_error(motion, "C", "B", "E", self.a6, np.pi - np.asarray(self.sigma)),
+            "EF": _arc_error(motion, "E", "F", self.a7),
+            "FG": _arc_error(motion, "F", "G", self.a8),
+            "unit": _unit_error(motion),
+        }
