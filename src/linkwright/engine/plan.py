@@ -456,6 +456,15 @@ class SphereDyad:
         regular &= margin > SINGULAR_MARGIN
         vel = acc = None
         zero = np.zeros(pos.shape[:-1])
+        # At a singular sample the solve gives inf, and inf·0 below NaN: both are masked.
+        with np.errstate(invalid="ignore", over="ignore"):
+            vel, acc = self._rates(ctx, j1, j2, pos, zero)
+        vel, acc = _mask_derivatives(vel, acc, regular)
+        return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
+
+    def _rates(self, ctx, j1, j2, pos, zero):
+        p1, p2 = j1.pos, j2.pos
+        vel = acc = None
         if ctx.order >= 1:
             vel, _ = sphere.solve_3x3_rows(
                 p1, p2, pos, -sphere.dot(pos, j1.vel), -sphere.dot(pos, j2.vel), zero
@@ -469,8 +478,7 @@ class SphereDyad:
                 -2.0 * sphere.dot(vel, j2.vel) - sphere.dot(pos, j2.acc),
                 -sphere.dot(vel, vel),
             )
-        vel, acc = _mask_derivatives(vel, acc, regular)
-        return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
+        return vel, acc
 
 
 @dataclass(frozen=True)
