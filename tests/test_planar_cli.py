@@ -47,9 +47,11 @@ def test_papers_command(capsys, tmp_path):
     assert status == 0
     assert (tmp_path / "paper004.md").is_file() and (tmp_path / "p004-doubleslider.png").is_file()
     assert "eq. 3 at every sampled P" in (tmp_path / "paper004.md").read_text(encoding="utf-8")
-    for bad in ("000", "7"):
+    for bad in ("7", "0001", "erratum"):
         status, _, err = run(capsys, "papers", bad)
         assert status == 2 and err.startswith("error: ")
+    status, out, _ = run(capsys, "papers", "errata")
+    assert status == 0 and out.startswith("# Errata of the seed papers")
 
 
 def test_paper002_study_keeps_what_the_paper_keeps():

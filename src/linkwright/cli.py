@@ -150,8 +150,14 @@ def _num(x: Any) -> float | None:
 
 
 def _xy(row: Any) -> list[float] | None:
-    x, y = float(row[0]), float(row[1])
-    return [x, y] if math.isfinite(x) and math.isfinite(y) else None
+    """A joint's coordinates as plain floats: [x, y] in the plane, the unit vector [x, y, z] on
+    the sphere; None where it has none (NaN)."""
+    values = [float(v) for v in row]
+    return values if all(math.isfinite(v) for v in values) else None
+
+
+def _axes(mech: Mechanism) -> str:
+    return "xyz" if _structure(mech).space == "sphere" else "xy"
 
 
 def _jsonable(value: Any) -> Any:
@@ -220,7 +226,9 @@ def _structure(mech: Mechanism) -> Any:
 
 
 def _output_driven(mech: Mechanism) -> bool:
-    return getattr(mech, "input", "crank") == "output"
+    """Driven so that a triad remains: the planar Stephenson III at its output link D0D, the
+    spherical one at FG."""
+    return getattr(mech, "input", "crank") in ("output", "FG")
 
 
 def _ground_joints(mech: Mechanism) -> tuple[str, ...]:
@@ -245,8 +253,9 @@ def unassembled_reason(mech: Mechanism, theta: float) -> str:
     """
     import numpy as np
 
-    from linkwright.engine import DyadRRP, DyadRRR
+    from linkwright.engine import DyadRRP, DyadRRR, SphereDyad
     from linkwright.engine.evaluate import place_all
+    from linkwright.geometry import sphere
 
     params = mech.params()
     _, states = place_all(mech.plan, params, np.array([theta]), points=mech.points, order=0)
@@ -288,6 +297,26 @@ def unassembled_reason(mech: Mechanism, theta: float) -> str:
             return (
                 f"{head}: the {w} cannot reach the slider's line "
                 f"(dyad {dyad.name}: {dyad.p1} is {off:.6g} from it > {w} = {value(dyad.r):.6g})"
+            )
+        if isinstance(dyad, SphereDyad):
+            p1, p2 = states[dyad.p1].pos[..., 0, :], states[dyad.p2].pos[..., 0, :]
+            d = math.degrees(float(sphere.arc(p1, p2)))
+            r1, r2 = math.degrees(value(dyad.r1)), math.degrees(value(dyad.r2))
+            w1, w2 = word(dyad.r1), word(dyad.r2)
+            where = f"dyad {dyad.name}: arc {dyad.p1}{dyad.p2} = {d:.6g}°"
+            if d == 0 or d == 180:
+                return (
+                    f"{head}: the axes {dyad.p1} and {dyad.p2} of dyad {dyad.name} are "
+                    "parallel, so no great circle joins them"
+                )
+            if d > min(r1 + r2, 360 - r1 - r2):
+                return (
+                    f"{head}: the {w1} and {w2} cannot reach ({where} > "
+                    f"min({w1} + {w2}, 360° - {w1} - {w2}) = {min(r1 + r2, 360 - r1 - r2):.6g}°)"
+                )
+            return (
+                f"{head}: the {w1} and {w2} cannot fold that short "
+                f"({where} < |{w1} - {w2}| = {abs(r1 - r2):.6g}°)"
             )
         return f"{head} (dyad {dyad.name})"
     return head
@@ -433,7 +462,7 @@ def _solve_text(doc: Document, result: Mapping[str, Any], derivatives: bool) -> 
     lines = [_heading(doc)]
     if ground:
         pivots = ", ".join(
-            f"{j} = ({_fmt(xy[0], 0, 6)}, {_fmt(xy[1], 0, 6)})"
+            f"{j} = ({', '.join(_fmt(c, 0, 6) for c in xy)})"
             for j in ground
             if (xy := _ground_xy(mech, j)) is not None
         )
@@ -444,8 +473,9 @@ def _solve_text(doc: Document, result: Mapping[str, Any], derivatives: bool) -> 
             ("velocity", "velocities, per radian of input"),
             ("acceleration", "accelerations, per radian of input"),
         ]
+    axes = _axes(mech)
     header = f"{'input_deg':>10} {'assembly':>9} " + " ".join(
-        f"{j + '.' + c:>11}" for j in moving for c in "xy"
+        f"{j + '.' + c:>11}" for j in moving for c in axes
     )
     for key, label in sections:
         lines += ["", f"# {label}", header]
@@ -458,7 +488,7 @@ def _solve_text(doc: Document, result: Mapping[str, Any], derivatives: bool) -> 
                 cells = " ".join(
                     _fmt(None if values[j] is None else values[j][c])
                     for j in moving
-                    for c in (0, 1)
+                    for c in range(len(axes))
                 )
                 lines.append(f"{deg} {_signs(entry['assembly']):>9} {cells}")
     return "\n".join(lines) + "\n"
@@ -501,19 +531,22 @@ def curve(
         sys.stdout.write(_dump(result))
         return
     rows = zip(result["input_deg"], result["points"], result["assembly"], strict=True)
+    axes = _axes(doc.mechanism)
     if as_csv:
-        out = ["input_deg,x,y,assembly"]
+        out = [f"input_deg,{','.join(axes)},assembly"]
         for deg, xy, asm in rows:
-            x, y = ("", "") if xy is None else (repr(xy[0]), repr(xy[1]))
-            out.append(f"{deg!r},{x},{y},{asm}")
+            cells = [""] * len(axes) if xy is None else [repr(c) for c in xy]
+            out.append(f"{deg!r},{','.join(cells)},{asm}")
         sys.stdout.write("\n".join(out) + "\n")
         return
     turn = "the input turns fully" if result["full_turn"] else "the input rocks between its limits"
     out = [_heading(doc), f"# path of {result['joint']} over the closed circuit; {turn}"]
-    out.append(f"{'input_deg':>10} {'x':>11} {'y':>11} {'assembly':>9}")
+    if len(axes) == 3:
+        out.append("# on the unit sphere: each point is the unit vector of the joint's axis")
+    out.append(f"{'input_deg':>10} " + " ".join(f"{c:>11}" for c in axes) + f" {'assembly':>9}")
     for deg, xy, asm in rows:
-        x, y = (None, None) if xy is None else xy
-        out.append(f"{_fmt(deg, 10, 3)} {_fmt(x)} {_fmt(y)} {asm:>+9d}")
+        cells = [None] * len(axes) if xy is None else xy
+        out.append(f"{_fmt(deg, 10, 3)} {' '.join(_fmt(c) for c in cells)} {asm:>+9d}")
     sys.stdout.write("\n".join(out) + "\n")
 
 
@@ -613,9 +646,12 @@ def demo(
 
 
 PAPERS = {
+    "000": "spherical coupler curves: Figs 6-8 in both assembly modes, both coupler-point methods",
+    "001": "spherical Stephenson III: every assembly configuration, inputs AB and FG",
     "002": "geared five-bar: the original curve, its speed, the pivot-moving study",
-    "003": "four-bar tables 1, 2 and 4 (planar halves), printed beside ours",
+    "003": "four-bar tables 1-4, planar and spherical, printed beside ours; the synthesis example",
     "004": "double slider: eqs. 3-5 and 9 checked on 10,000 random linkages",
+    "errata": "print what linkwright found wrong in the papers (writes nothing)",
 }
 
 
@@ -631,28 +667,25 @@ def papers(
         Path, typer.Option("--out", metavar="DIR", help="Folder to write the files into.")
     ] = Path("papers"),
 ) -> None:
-    """Regenerate a seed paper's tables and figures with linkwright's numbers."""
-    key = paper.strip().zfill(3)
-    if key in ("000", "001"):
-        raise CliError(f"paper {key} needs spherical linkages, which are not built yet")
+    """Regenerate a seed paper's tables and figures with linkwright's numbers beside the printed
+    ones (ID = errata prints the errata page instead)."""
+    import importlib
+
+    key = paper.strip().lower()
+    if key != "errata":
+        key = key.zfill(3)
     if key not in PAPERS:
         raise CliError(f"unknown paper {paper!r} (known: {', '.join(PAPERS)})")
+    if key == "errata":
+        from linkwright.papers import errata
+
+        sys.stdout.write(errata())
+        return
     out.mkdir(parents=True, exist_ok=True)
-    if key == "002":
-        from linkwright.papers.p002 import reproduce
-
-        written = reproduce(out)
-    elif key == "004":
-        from linkwright.papers.p004 import reproduce as reproduce4
-
-        written = reproduce4(out)
-    else:
-        from linkwright.demo import paper003_markdown
-
-        page = out / "paper003-planar.md"
-        page.write_text(paper003_markdown(), encoding="utf-8")
-        written = [page]
+    module = importlib.import_module(f"linkwright.papers.p{key}")
+    written = module.reproduce(out)
     sys.stdout.write("".join(f"{path}\n" for path in written))
+    sys.stdout.write("errata of every paper: linkwright papers errata\n")
 
 
 # --------------------------------------------------------------------------------------------

@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from linkwright.engine import DyadRRP, DyadRRR, Motion, input_turns
-from linkwright.geometry import plane
+from linkwright.engine import DyadRRP, DyadRRR, Motion, SphereDyad, input_turns
+from linkwright.geometry import plane, sphere
 from linkwright.mechanisms.base import Mechanism, circuit, input_range
 
 __all__ = ["dyad_transmission_angles", "general_report", "point_speed"]
@@ -29,7 +29,9 @@ def dyad_transmission_angles(mechanism: Mechanism, motion: Motion) -> dict[str, 
     """The transmission angle of every dyad at every sample (radians, in [0, π]).
 
     RRR dyad J from P1, P2: the angle at J between J→P1 and J→P2. RRP dyad (slider pin J from
-    P1 on a guide at angle a): the angle between J→P1 and the guide's normal (a + 90°).
+    P1 on a guide at angle a): the angle between J→P1 and the guide's normal (a + 90°). On the
+    sphere: the angle at J between the great circles J→P1 and J→P2 (the dihedral angle between
+    the two links' planes), which is the spherical four-bar's transmission angle.
 
     Examples
     --------
@@ -52,6 +54,10 @@ def dyad_transmission_angles(mechanism: Mechanism, motion: Motion) -> dict[str, 
             angle = dyad.line_angle
             a = np.asarray(params[angle] if isinstance(angle, str) else angle, dtype=float)
             w = np.broadcast_to(plane.perp(plane.unit_direction(a))[..., None, :], u.shape)
+        elif isinstance(dyad, SphereDyad):
+            at_joint = sphere.angle_at(j, motion.positions[dyad.p1], motion.positions[dyad.p2])
+            out[dyad.name] = np.abs(at_joint)
+            continue
         else:  # pragma: no cover - every dyad type is listed above
             continue
         out[dyad.name] = np.arctan2(np.abs(plane.cross(u, w)), plane.dot(u, w))
@@ -61,7 +67,8 @@ def dyad_transmission_angles(mechanism: Mechanism, motion: Motion) -> dict[str, 
 def point_speed(motion: Motion, joint: str) -> Array:
     """|d joint/dθ|: how far the joint moves per radian of input (paper 002 graphs it).
 
-    Multiply by the input's angular speed for a speed in length per second.
+    Multiply by the input's angular speed for a speed in length per second. On the sphere the
+    joint is a unit vector and this is its angular speed, radians of arc per radian of input.
 
     Examples
     --------
@@ -74,7 +81,7 @@ def point_speed(motion: Motion, joint: str) -> Array:
     """
     if motion.velocities is None:
         raise ValueError("the motion has no velocities: solve it with order ≥ 1")
-    return plane.norm(motion.velocities[joint])
+    return np.linalg.norm(motion.velocities[joint], axis=-1)
 
 
 def _num(x: Any, digits: int = 12) -> float | None:
@@ -137,7 +144,10 @@ def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> di
     for joint in plan.traced:
         pos = motion.positions[joint]
         closed = np.concatenate((pos, pos[:1]), axis=0)
-        length = np.nansum(plane.norm(np.diff(closed, axis=0)))
+        if plan.space == "sphere":  # arc length on the unit sphere, radians
+            length = np.nansum(sphere.arc(closed[:-1], closed[1:]))
+        else:
+            length = np.nansum(plane.norm(np.diff(closed, axis=0)))
         speed = point_speed(motion, joint)
         traced[joint] = {
             "path_length": _num(length),
