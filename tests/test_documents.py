@@ -217,7 +217,8 @@ FOURBAR_ERRORS = [
         "mechanism.family",
         "sixbar",
         "mechanism.family: unknown family 'sixbar' (known: fourbar, slidercrank, geared-fivebar, "
-        "doubleslider, watt1, watt2, stephenson1, stephenson3, linkage)",
+        "doubleslider, watt1, watt2, stephenson1, stephenson3, spherical-fourbar, "
+        "spherical-sixbar, spherical-stephenson3, linkage)",
     ),
     ("mechanism.family", 4, "mechanism.family: must be a string, got 4"),
     ("format", "linkwright/9", 'format: expected "linkwright/1", got "linkwright/9"'),
@@ -546,6 +547,9 @@ CLASS_NAMES = {
     "stephenson1": "Stephenson1",
     "stephenson3": "Stephenson3",
     "linkage": "Linkage",
+    "spherical-fourbar": "SphericalFourBar",
+    "spherical-sixbar": "SphericalSixBar",
+    "spherical-stephenson3": "SphericalStephenson3",
 }
 
 
@@ -1051,10 +1055,13 @@ LINKAGE_ERRORS = [
     (with_change(LINKAGE, "mechanism.traced", [1]), "mechanism.traced[0]: must be a joint name"),
     (
         with_change(LINKAGE, "mechanism.space", "sphere"),
-        'mechanism.space: spherical linkages are not supported yet (the only space is "plane")',
+        "mechanism.joints[0].at: must be an axis [x, y, z]",
     ),
     (with_change(LINKAGE, "mechanism.space", "plain"), "mechanism.space: unknown value 'plain'"),
-    (with_change(LINKAGE, "mechanism.space", 2), 'mechanism.space: must be "plane", got 2'),
+    (
+        with_change(LINKAGE, "mechanism.space", 2),
+        'mechanism.space: must be "plane" or "sphere", got 2',
+    ),
     (with_change(LINKAGE, "mechanism.joint", []), "mechanism: unknown field 'joint' (did you"),
 ]
 

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine.evaluate import Motion, batch_shape, evaluate, place_all
-from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan
+from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, SphereCrank
 from linkwright.geometry import plane
 
 __all__ = ["InputArcs", "NoPeriod", "input_arcs", "input_turns", "trace"]
@@ -375,7 +375,7 @@ def input_turns(plan: Plan, params: Mapping[str, ArrayLike], *, points=frozenset
     shape = batch_shape(params, points)
     ratios = []
     for step in plan.steps:
-        if isinstance(step, Crank):
+        if isinstance(step, Crank | SphereCrank):
             r = params[step.ratio] if isinstance(step.ratio, str) else step.ratio
             ratios.append(np.broadcast_to(np.asarray(r, dtype=float), shape))
     turns = np.zeros(shape, dtype=np.int64)

@@ -2,10 +2,20 @@
 
 A document speaks degrees; the mechanism objects it builds speak radians. Every field a family
 accepts is declared once, in :data:`FAMILY_SPECS`, as a *kind* (point, length, angle in degrees,
-sign, coupler point, slider line); validation, defaults, construction and the reverse conversion
-all read that one table, so a new family is a new row. The composed family ``linkage`` is one
-row too: its ``joints`` field is a list of joint tables, each read through the same kinds from
-the per-type table :data:`JOINT_SPECS`.
+sign, coupler point, slider line; on the sphere arc, {arc, angle} offset, axis); validation,
+defaults, construction and the reverse conversion all read that one table, so a new family is a
+new row. The composed family ``linkage`` is one row too: its ``joints`` field is a list of joint
+tables, each read through the same kinds from the per-type table :data:`JOINT_SPECS`, or
+:data:`SPHERE_JOINT_SPECS` when its ``space`` is ``"sphere"``.
+
+Spherical links are arcs (central angles) in degrees, each strictly between 0 and 180; a point
+on a link is ``{arc, angle}``: its arc from the link's first joint (0 to 180) and its angle from
+the link, right-handed about that joint's axis (paper 000's AC and μ = BAC). The three spherical
+families are ``spherical-fourbar`` (paper 000's frame, crank, coupler, rocker and ``point``),
+``spherical-sixbar`` (paper 000's Fig. 8: ``point`` = C, ``link5`` = CE, ``link6`` = E0E,
+``ground`` = {B0E0, ε}, ``d`` = {CD, ECD}) and ``spherical-stephenson3`` (paper 001: a1 … a9,
+sigma, input "AB" or "FG"). A spherical linkage's fixed joint is an axis ``at = [x, y, z]``,
+any non-zero vector along it (the document keeps it as written; the joint is its direction).
 
 Example document (TOML)::
 
@@ -21,6 +31,62 @@ Example document (TOML)::
     rocker = 6.02
     point = { u = 2.5, v = 1.5 }
     assembly = 1
+
+Paper 000's Fig. 6 spherical crank-rocker::
+
+    format = "linkwright/1"
+
+    [mechanism]
+    family = "spherical-fourbar"
+    frame = 40.0
+    crank = 20.0
+    coupler = 45.0
+    rocker = 35.0
+    point = { arc = 50.0, angle = 130.0 }
+    assembly = 1
+
+The same linkage composed joint by joint on the sphere (a crank's angle is measured from the
+great circle towards its ``toward`` joint, which defaults to the first other fixed joint
+listed before it)::
+
+    format = "linkwright/1"
+
+    [mechanism]
+    family = "linkage"
+    space = "sphere"
+
+    [[mechanism.joints]]
+    name = "A0"
+    type = "fixed"
+    at = [1.0, 0.0, 0.0]
+
+    [[mechanism.joints]]
+    name = "B0"
+    type = "fixed"
+    at = [0.766044443118978, 0.6427876096865393, 0.0]  # (cos 40°, sin 40°, 0)
+
+    [[mechanism.joints]]
+    name = "A"
+    type = "crank"
+    pivot = "A0"
+    arc = 20.0
+    toward = "B0"
+
+    [[mechanism.joints]]
+    name = "B"
+    type = "rrr"
+    p1 = "A"
+    r1 = 45.0
+    p2 = "B0"
+    r2 = 35.0
+
+    [[mechanism.joints]]
+    name = "P"
+    type = "rigid"
+    origin = "A"
+    toward = "B"
+    arc = 50.0
+    angle = 130.0
 
 A composed linkage (a four-bar written joint by joint, tracing its coupler point P)::
 
@@ -89,6 +155,7 @@ __all__ = [
     "FORMAT",
     "JOINT_SPECS",
     "KINDS",
+    "SPHERE_JOINT_SPECS",
     "Document",
     "DocumentError",
     "FamilySpec",
@@ -230,6 +297,60 @@ def _parse_line(value: Any, path: str) -> dict[str, Any]:
     }
 
 
+def _parse_arc(value: Any, path: str) -> float:
+    # The radian check catches what the degree check cannot: a subnormal arc whose radians
+    # underflow to 0 (180 itself is the only degree value whose radians reach π).
+    x = _number(value, path, "an arc in degrees")
+    if not (0 < x < 180 and 0 < math.radians(x) < math.pi):
+        raise DocumentError(
+            path,
+            f"must be an arc strictly between 0 and 180 degrees, got {_show(value)} "
+            "(a spherical link's central angle)",
+        )
+    return x
+
+
+def _parse_offset_arc(value: Any, path: str) -> float:
+    x = _number(value, path, "an arc in degrees")
+    if not 0 <= x <= 180:
+        raise DocumentError(
+            path,
+            f"must be an arc from 0 to 180 degrees, got {_show(value)} "
+            "(for a point on the other side, add 180 to its angle instead)",
+        )
+    return x
+
+
+def _arc_angle(strict: bool) -> Callable[[Any, str], dict[str, float]]:
+    """A table {arc, angle}: a rigid point's (``strict`` False: 0 ≤ arc ≤ 180) or a ground
+    pivot's (``strict``: a link, 0 < arc < 180) place from a joint; angle defaults to 0."""
+    parse_arc = _parse_arc if strict else _parse_offset_arc
+
+    def parse(value: Any, path: str) -> dict[str, float]:
+        table = _table(value, path, "a table {arc = .., angle = ..}")
+        _check_keys(table, ("arc", "angle"), path)
+        if "arc" not in table:
+            raise DocumentError(f"{path}.arc", "missing required field (an arc in degrees)")
+        return {
+            "arc": parse_arc(table["arc"], f"{path}.arc"),
+            "angle": _parse_angle(table.get("angle", 0.0), f"{path}.angle"),
+        }
+
+    return parse
+
+
+def _parse_axis(value: Any, path: str) -> list[float]:
+    what = "an axis [x, y, z] (a vector from the sphere's centre along the joint's axis)"
+    if not isinstance(value, list | tuple) or len(value) != 3:
+        raise DocumentError(path, f"must be {what}, got {_show(value)}")
+    axis = [_number(c, f"{path}[{i}]", "a number") for i, c in enumerate(value)]
+    if not any(axis):
+        raise DocumentError(
+            path, "must not be the zero vector [0, 0, 0] (its direction is the joint's axis)"
+        )
+    return axis
+
+
 def _parse_signed(value: Any, path: str) -> float:
     return _number(value, path, "a number")
 
@@ -311,13 +432,27 @@ def _scalar(mech: Any, attr: str) -> float:
     return float(value)
 
 
-def _pair(mech: Any, attr: str) -> list[float]:
+def _pair(mech: Any, attr: str, size: int = 2) -> list[float]:
     import numpy as np
 
     value = np.asarray(getattr(mech, attr), dtype=float)
-    if value.shape != (2,):
-        raise DocumentError(attr, f"must be a single point to be written, got shape {value.shape}")
-    return [float(value[0]), float(value[1])]
+    if value.shape != (size,):
+        what = "point" if size == 2 else "axis"
+        raise DocumentError(attr, f"must be a single {what} to be written, got shape {value.shape}")
+    return [float(c) for c in value]
+
+
+def _arc_deg(mech: Any, attr: str, strict: bool) -> float:
+    """An arc field in degrees, in the shortest decimal that the document accepts back.
+
+    Every radian value strictly inside (0, π) has its degrees strictly inside (0, 180) (the
+    largest float below π gives 179.99999999999997), but tidying may round such a value onto
+    180 (or 0, for a strict arc): then the untidied degrees are written.
+    """
+    exact = math.degrees(_scalar(mech, attr))
+    tidy = tidy_number(exact)
+    inside = 0 < tidy < 180 if strict else 0 <= tidy <= 180
+    return tidy if inside else exact
 
 
 @dataclass(frozen=True)
@@ -330,15 +465,19 @@ class Kind:
     parse : (raw value, path) → canonical document value; raises :class:`DocumentError`.
     to_kwargs : (canonical value, constructor attribute names) → constructor arguments.
     from_mech : (mechanism, attribute names) → canonical document value.
-    builds : False for a field that only says how to read the document (a linkage's ``space``)
-        and passes nothing to the constructor.
+    builds : False for a field that only says how to read the document and passes nothing to
+        the constructor.
+    context : True for a field read in the light of the fields before it (a linkage's joints,
+        whose kinds depend on its ``space``): ``parse`` and ``to_kwargs`` then take the
+        family's fields parsed so far as a third argument.
     """
 
     describe: str
-    parse: Callable[[Any, str], Any]
-    to_kwargs: Callable[[Any, tuple[str, ...]], dict[str, Any]]
+    parse: Callable[..., Any]
+    to_kwargs: Callable[..., dict[str, Any]]
     from_mech: Callable[[Any, tuple[str, ...]], Any]
     builds: bool = True
+    context: bool = False
 
 
 KINDS: dict[str, Kind] = {
@@ -391,15 +530,48 @@ KINDS: dict[str, Kind] = {
         lambda m, a: _scalar(m, a[0]),
     ),
     "stephenson_input": _choice(("crank", "output")),
+    "spherical_input": _choice(("AB", "FG")),
+    "arc": Kind(
+        "an arc in degrees, strictly between 0 and 180",
+        _parse_arc,
+        lambda v, a: {a[0]: math.radians(v)},
+        lambda m, a: _arc_deg(m, a[0], strict=True),
+    ),
+    "offset_arc": Kind(
+        "an arc in degrees, from 0 to 180",
+        _parse_offset_arc,
+        lambda v, a: {a[0]: math.radians(v)},
+        lambda m, a: _arc_deg(m, a[0], strict=False),
+    ),
+    "arc_point": Kind(
+        "a table {arc = .., angle = ..} (degrees, arc from 0 to 180)",
+        _arc_angle(strict=False),
+        lambda v, a: {a[0]: math.radians(v["arc"]), a[1]: math.radians(v["angle"])},
+        lambda m, a: {
+            "arc": _arc_deg(m, a[0], strict=False),
+            "angle": _deg(_scalar(m, a[1])),
+        },
+    ),
+    "arc_pivot": Kind(
+        "a table {arc = .., angle = ..} (degrees, arc strictly between 0 and 180)",
+        _arc_angle(strict=True),
+        lambda v, a: {a[0]: math.radians(v["arc"]), a[1]: math.radians(v["angle"])},
+        lambda m, a: {
+            "arc": _arc_deg(m, a[0], strict=True),
+            "angle": _deg(_scalar(m, a[1])),
+        },
+    ),
+    "axis": Kind(
+        "an axis [x, y, z]",
+        _parse_axis,
+        lambda v, a: {a[0]: tuple(v)},
+        lambda m, a: _pair(m, a[0], size=3),
+    ),
     "space": Kind(
-        '"plane"',
-        _choice(
-            ("plane",),
-            {"sphere": 'spherical linkages are not supported yet (the only space is "plane")'},
-        ).parse,
-        lambda v, a: {},
-        lambda m, a: str(getattr(m, "space", "plane")),
-        builds=False,
+        '"plane" or "sphere"',
+        _choice(("plane", "sphere")).parse,
+        lambda v, a: {a[0]: v},
+        lambda m, a: str(getattr(m, a[0])),
     ),
     "joint": Kind(
         "a joint name",
@@ -415,9 +587,10 @@ KINDS: dict[str, Kind] = {
     ),
     "joints": Kind(
         "a list of joint tables [[mechanism.joints]]",
-        lambda v, p: _parse_joints(v, p),
-        lambda v, a: {a[0]: _build_joints(v)},
-        lambda m, a: _joints_from_mech(getattr(m, a[0])),
+        lambda v, p, m: _parse_joints(v, p, m["space"]),
+        lambda v, a, m: {a[0]: _build_joints(v, m["space"])},
+        lambda m, a: _joints_from_mech(getattr(m, a[0]), m.space),
+        context=True,
     ),
 }
 
@@ -521,6 +694,17 @@ def _doubleslider_lines(m: dict[str, Any]) -> None:
         )
 
 
+# Paper 000's four-bar: frame A0B0 (a1), crank A0A (a2), coupler AB (a3), rocker B0B (a4); its
+# coupler point at arc AP from A and angle BAP about +OA (the paper's AC and μ).
+_SPHERICAL_FOURBAR_FIELDS = (
+    FieldSpec("frame", "arc"),
+    FieldSpec("crank", "arc"),
+    FieldSpec("coupler", "arc"),
+    FieldSpec("rocker", "arc"),
+)
+_NO_OFFSET = {"arc": 0.0, "angle": 0.0}
+
+
 def _linkage_traced(m: dict[str, Any]) -> None:
     names = {j["name"] for j in m["joints"]}
     for i, name in enumerate(m["traced"]):
@@ -576,6 +760,47 @@ FAMILY_SPECS: dict[str, FamilySpec] = {
     "watt2": _sixbar(second=_D0),
     "stephenson1": _sixbar(second=_E),
     "stephenson3": _sixbar(second=_D0, stephenson3=True),
+    "spherical-fourbar": FamilySpec(
+        fields=(
+            *_SPHERICAL_FOURBAR_FIELDS,
+            FieldSpec("point", "arc_point", ("point_arc", "point_angle"), _NO_OFFSET),
+            _ASSEMBLY,
+        ),
+    ),
+    # Paper 000, Fig. 8: the four-bar's coupler point is C, where link5 (CE) hangs; E0 sits at
+    # ground = {arc = B0E0, angle = ε} from B0 (ε from the frame circle beyond B0); the traced
+    # point D at d = {arc = CD, angle = ECD} from C. C is required, as a planar six-bar's C is.
+    "spherical-sixbar": FamilySpec(
+        fields=(
+            *_SPHERICAL_FOURBAR_FIELDS,
+            FieldSpec("point", "arc_point", ("point_arc", "point_angle")),
+            FieldSpec("link5", "arc"),
+            FieldSpec("link6", "arc"),
+            FieldSpec("ground", "arc_pivot", ("ground_arc", "ground_angle")),
+            FieldSpec("d", "arc_point", ("d_arc", "d_angle"), _NO_OFFSET),
+            _ASSEMBLY,
+            FieldSpec("assembly2", "sign", default=1),
+        ),
+    ),
+    # Paper 001: a1 = AD, a2 = AB, a3 = BC, a4 = CD, a6 = CE, σ = angle BCE, a7 = EF, a8 = FG,
+    # a9 = DG. No check that a1 + a9 < 360 (the class's): two arcs each below 180 cannot reach
+    # it, in radians either (the two largest floats below π sum to less than 2π).
+    "spherical-stephenson3": FamilySpec(
+        fields=(
+            FieldSpec("a1", "arc"),
+            FieldSpec("a2", "arc"),
+            FieldSpec("a3", "arc"),
+            FieldSpec("a4", "arc"),
+            FieldSpec("a6", "arc"),
+            FieldSpec("sigma", "angle_deg"),
+            FieldSpec("a7", "arc"),
+            FieldSpec("a8", "arc"),
+            FieldSpec("a9", "arc"),
+            FieldSpec("input", "spherical_input", default="AB"),
+            _ASSEMBLY,
+            FieldSpec("assembly2", "sign", default=1),
+        ),
+    ),
     "linkage": FamilySpec(
         fields=(
             FieldSpec("space", "space", default="plane"),
@@ -622,9 +847,60 @@ JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
         FieldSpec("v", "number", default=0.0),
     ),
 }
-"""A ``linkage`` joint's fields by its ``type`` (besides ``name`` and ``type``), in document
-order; the names are those of the joint spec classes of :mod:`linkwright.mechanisms.linkage`,
-and angles are degrees here as everywhere in a document."""
+"""A planar ``linkage`` joint's fields by its ``type`` (besides ``name`` and ``type``), in
+document order; the names are those of the joint spec classes of
+:mod:`linkwright.mechanisms.linkage`, and angles are degrees here as everywhere in a document."""
+
+_TOWARD = "the first fixed joint listed before the crank, other than its pivot"
+
+SPHERE_JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
+    # Any non-zero vector: the joint is its direction (the class normalises it), so an axis
+    # can be written [0, 0, 1] or [1, 1, 0]; the document keeps the vector as written.
+    "fixed": (FieldSpec("at", "axis"),),
+    "crank": (
+        FieldSpec("pivot", "joint"),
+        FieldSpec("arc", "arc"),
+        FieldSpec("ratio", "ratio", default=1.0),
+        FieldSpec("phase", "angle_deg", default=0.0),
+        # Filled in by _parse_joints, which sees the joints before the crank.
+        FieldSpec("toward", "joint", default=Derived(_TOWARD, lambda m: None)),
+    ),
+    "rrr": (
+        FieldSpec("p1", "joint"),
+        FieldSpec("r1", "arc"),
+        FieldSpec("p2", "joint"),
+        FieldSpec("r2", "arc"),
+        FieldSpec("assembly", "sign", default=1),
+    ),
+    "rigid": (
+        FieldSpec("origin", "joint"),
+        FieldSpec("toward", "joint"),
+        FieldSpec("arc", "offset_arc", default=0.0),
+        FieldSpec("angle", "angle_deg", default=0.0),
+    ),
+}
+"""A spherical ``linkage`` joint's fields by its ``type`` (``space = "sphere"``): arcs and angles
+in degrees, a fixed joint's ``at`` an axis [x, y, z]; the names are those of
+:class:`~linkwright.mechanisms.linkage.FixedJoint`,
+:class:`~linkwright.mechanisms.linkage.SphereCrankJoint`,
+:class:`~linkwright.mechanisms.linkage.DyadJoint` and
+:class:`~linkwright.mechanisms.linkage.SphereRigidJoint`. There is no ``rrp``."""
+
+_JOINT_SPECS_IN: dict[str, dict[str, tuple[FieldSpec, ...]]] = {
+    "plane": JOINT_SPECS,
+    "sphere": SPHERE_JOINT_SPECS,
+}
+
+# Planar habits on the sphere, answered with what to write instead.
+_SPHERE_HINTS = {
+    ("crank", "length"): "a spherical crank's length is an arc: write arc = <degrees>",
+    ("rigid", "u"): "a spherical rigid point is placed by arc and angle (degrees), not u and v",
+    ("rigid", "v"): "a spherical rigid point is placed by arc and angle (degrees), not u and v",
+}
+_NO_SPHERICAL_SLIDER = (
+    "a slider (rrp) has no spherical counterpart: a pin on a great-circle guide is an rrr "
+    "joint whose second link, 90 degrees long, turns about the guide's pole; write that instead"
+)
 
 
 def _parse_fields(
@@ -635,7 +911,10 @@ def _parse_fields(
         where = f"{path}.{f.name}"
         kind = KINDS[f.kind]
         if f.name in table:
-            out[f.name] = kind.parse(table[f.name], where)
+            value = table[f.name]
+            out[f.name] = (
+                kind.parse(value, where, out) if kind.context else kind.parse(value, where)
+            )
         elif f.default is None:
             raise DocumentError(where, f"missing required field ({kind.describe})")
         elif isinstance(f.default, Derived):
@@ -645,16 +924,19 @@ def _parse_fields(
     return out
 
 
-def _parse_joints(value: Any, path: str) -> list[dict[str, Any]]:
-    """A linkage's joint tables, each checked field by field against :data:`JOINT_SPECS`.
+def _parse_joints(value: Any, path: str, space: str) -> list[dict[str, Any]]:
+    """A linkage's joint tables, each checked field by field against :data:`JOINT_SPECS` (or
+    :data:`SPHERE_JOINT_SPECS` for ``space = "sphere"``).
 
     How the joints fit together (order, references, cycles, over-constraint) is the Linkage
-    class's to judge; :func:`_build` turns its verdict into a path here.
+    class's to judge; :func:`_build` turns its verdict into a path here. The one exception is a
+    spherical crank's default ``toward``, which the document must spell out to be complete.
     """
     if not isinstance(value, list | tuple):
         raise DocumentError(path, f"must be a list of joint tables, got {_show(value)}")
-    types = tuple(JOINT_SPECS)
-    out = []
+    joint_specs = _JOINT_SPECS_IN[space]
+    types = tuple(joint_specs)
+    out: list[dict[str, Any]] = []
     for i, entry in enumerate(value):
         where = f"{path}[{i}]"
         table = _table(entry, where, "a joint table {name = .., type = .., ...}")
@@ -668,31 +950,54 @@ def _parse_joints(value: Any, path: str) -> list[dict[str, Any]]:
         kind = table["type"]
         if not isinstance(kind, str):
             raise DocumentError(f"{where}.type", f"must be a string, got {_show(kind)}")
-        if kind not in JOINT_SPECS:
+        if space == "sphere" and kind in ("rrp", "slider"):
+            raise DocumentError(f"{where}.type", _NO_SPHERICAL_SLIDER)
+        if kind not in joint_specs:
             raise DocumentError(f"{where}.type", _unknown("joint type", kind, types))
-        specs = JOINT_SPECS[kind]
+        specs = joint_specs[kind]
+        if space == "sphere":
+            for key in table:
+                if (kind, key) in _SPHERE_HINTS:
+                    raise DocumentError(f"{where}.{key}", _SPHERE_HINTS[(kind, key)])
         _check_keys(table, ("name", "type", *(f.name for f in specs)), where)
-        out.append(_parse_fields(table, specs, where, {"name": name, "type": kind}))
+        entry = _parse_fields(table, specs, where, {"name": name, "type": kind})
+        if space == "sphere" and kind == "crank" and entry["toward"] is None:
+            entry["toward"] = _default_toward(entry, out, f"{where}.toward")
+        out.append(entry)
     return out
 
 
-def _build_joints(joints: list[dict[str, Any]]) -> tuple[Any, ...]:
-    from linkwright.mechanisms.linkage import JOINT_TYPES
+def _default_toward(crank: dict[str, Any], before: list[dict[str, Any]], path: str) -> str:
+    """The fixed joint a spherical crank's angle starts towards, when the document names none
+    (the same rule as :class:`~linkwright.mechanisms.linkage.SphereCrankJoint`'s)."""
+    for j in before:
+        if j["type"] == "fixed" and j["name"] != crank["pivot"]:
+            return j["name"]
+    raise DocumentError(
+        path,
+        "missing, and no fixed joint other than the pivot is listed before this crank to "
+        "default to (the crank's angle is measured from the great circle towards it)",
+    )
 
+
+def _build_joints(joints: list[dict[str, Any]], space: str) -> tuple[Any, ...]:
+    from linkwright.mechanisms.linkage import SPACES
+
+    classes = SPACES[space]
     built = []
     for entry in joints:
         kwargs: dict[str, Any] = {"name": entry["name"]}
-        for f in JOINT_SPECS[entry["type"]]:
+        for f in _JOINT_SPECS_IN[space][entry["type"]]:
             kwargs.update(KINDS[f.kind].to_kwargs(entry[f.name], f.targets))
-        built.append(JOINT_TYPES[entry["type"]](**kwargs))
+        built.append(classes[entry["type"]](**kwargs))
     return tuple(built)
 
 
-def _joints_from_mech(joints: Any) -> list[dict[str, Any]]:
+def _joints_from_mech(joints: Any, space: str) -> list[dict[str, Any]]:
     out = []
     for i, joint in enumerate(joints):
         entry: dict[str, Any] = {"name": joint.name, "type": joint.type}
-        for f in JOINT_SPECS[joint.type]:
+        for f in _JOINT_SPECS_IN[space][joint.type]:
             try:
                 entry[f.name] = KINDS[f.kind].from_mech(joint, f.targets)
             except DocumentError as exc:
@@ -842,7 +1147,9 @@ def _build(mech: Mapping[str, Any]) -> Mechanism:
     family = mech["family"]
     kwargs: dict[str, Any] = {}
     for f in FAMILY_SPECS[family].fields:
-        kwargs.update(KINDS[f.kind].to_kwargs(mech[f.name], f.targets))
+        kind = KINDS[f.kind]
+        args = (mech[f.name], f.targets, mech) if kind.context else (mech[f.name], f.targets)
+        kwargs.update(kind.to_kwargs(*args))
     cls = _mechanism_class(family)
     try:
         return cls(**kwargs)

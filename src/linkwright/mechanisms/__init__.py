@@ -17,6 +17,8 @@ from linkwright.mechanisms.linkage import (
     Linkage,
     RigidJoint,
     SliderJoint,
+    SphereCrankJoint,
+    SphereRigidJoint,
 )
 from linkwright.mechanisms.planar import DoubleSlider, FourBar, GearedFiveBar, SliderCrank
 from linkwright.mechanisms.sixbar import Stephenson1, Stephenson3, Watt1, Watt2
@@ -60,6 +62,8 @@ __all__ = [
     "RigidJoint",
     "SliderCrank",
     "SliderJoint",
+    "SphereCrankJoint",
+    "SphereRigidJoint",
     "SphericalFourBar",
     "SphericalSixBar",
     "SphericalStephenson3",

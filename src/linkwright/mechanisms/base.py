@@ -194,6 +194,4 @@ def circuit(
 
 def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:
     """The admissible input arcs (limit positions as exact roots) of each mechanism."""
-    return input_arcs(
-        mechanism.plan, mechanism.params(), points=mechanism.points, method=method
-    )
+    return input_arcs(mechanism.plan, mechanism.params(), points=mechanism.points, method=method)
