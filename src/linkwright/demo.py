@@ -118,7 +118,13 @@ def run_demo(out_dir: str | Path = "out") -> str:
         doc = load_example(name)
         report = analyze(doc.mechanism)
         reports[name] = {"title": doc.title, **report}
-        if doc.family in ("fourbar", "slidercrank"):
+        if doc.mechanism.space == "sphere":
+            from linkwright.plot.sphere import plot_spherical_linkage
+
+            figure = plot_spherical_linkage(doc.mechanism, title=doc.title)
+            save_figure(figure, out / f"{name}-curves.png")
+            diagrams = plot_speed(doc.mechanism)
+        elif doc.family in ("fourbar", "slidercrank"):
             save_figure(plot_curves(doc.mechanism, title=doc.title), out / f"{name}-curves.png")
             diagrams = plot_diagrams(doc.mechanism, title=doc.title)
         else:
