@@ -387,6 +387,9 @@ def solve_document(
     order = 2 if derivatives else 0
     if _output_driven(mech):
         return _solve_triad(doc, degrees, theta, derivatives)
+    if all_configurations and not derivatives and doc.family == "spherical-stephenson3":
+        # Paper 001's analysis: every configuration with its error against every constraint.
+        return _solve_triad(doc, degrees, theta, derivatives)
     if all_configurations:
         motions = configurations(mech, theta, order=order)
     else:
@@ -416,8 +419,9 @@ def solve_document(
 def _solve_triad(
     doc: Document, degrees: Sequence[float], theta: Any, derivatives: bool
 ) -> dict[str, Any]:
-    """Every real configuration of a linkage whose input leaves a triad (all of them: there is
-    no assembly sign to choose one by), each verified against every constraint."""
+    """Every real configuration of a Stephenson III, each verified against every constraint:
+    all of them where its input leaves a triad (there is no assembly sign to choose one by),
+    and for ``solve --all`` on the spherical one (paper 001's configuration analysis)."""
     import numpy as np
 
     from linkwright.mechanisms import solve_all
@@ -425,7 +429,7 @@ def _solve_triad(
     if derivatives:
         raise CliError(
             "--derivatives: not available yet for a linkage driven so that a triad remains "
-            f'({doc.family} with input = "output"); positions are'
+            f'({doc.family} with input = "{doc.mechanism.input}"); positions are'
         )
     found = solve_all(doc.mechanism, theta)
     joints = doc.mechanism.reported_joints
@@ -449,7 +453,7 @@ def _solve_triad(
     count = np.asarray(found.count)
     return {
         "family": doc.family,
-        "input": "output",
+        "input": doc.mechanism.input,
         "max_configurations": int(count.max()) if count.size else 0,
         "samples": samples,
     }

@@ -14,6 +14,7 @@ from linkwright.engine.plan import (
     SphereRigid,
     Trammel,
 )
+from linkwright.engine.sphere_triad import SphereTriadPoses, sphere_triad, sphere_triad_sweep
 from linkwright.engine.triad import TriadPoses, sweep_roots, triad_poses, triad_rates
 
 __all__ = [
@@ -29,11 +30,14 @@ __all__ = [
     "SphereCrank",
     "SphereDyad",
     "SphereRigid",
+    "SphereTriadPoses",
     "Trammel",
     "TriadPoses",
     "evaluate",
     "input_arcs",
     "input_turns",
+    "sphere_triad",
+    "sphere_triad_sweep",
     "sweep_roots",
     "trace",
     "triad_poses",

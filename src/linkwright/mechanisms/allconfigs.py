@@ -70,6 +70,13 @@ class AllConfigurations:
         ``P`` (distance from their (u, v) places), ``input`` (the driven joint's distance from
         where θ puts it).
     residual : the largest of ``residuals`` for each configuration.
+
+    For the spherical Stephenson III (:class:`~linkwright.mechanisms.SphericalStephenson3`,
+    :func:`~linkwright.mechanisms.sphere_configs.solve_all_spherical`) ``driven`` is "AB" or
+    "FG", ``slots`` 4 or 8, positions end in 3 (unit vectors of the joints A, D, G, B, C, E, F),
+    configurations driven at FG come in the order of θ1, the signs are those of (B × D)·C and
+    (E × G)·F, and the residuals (``AB``, ``BC``, ``CD``, ``E``, ``EF``, ``FG``, ``unit``,
+    ``input``) are radians of arc or chords on the unit sphere.
     """
 
     driven: str
@@ -94,7 +101,9 @@ def _on_link(origin: Array, toward: Array, u: Array, v: Array) -> Array:
 def _read(mechanism: Any) -> tuple[dict[str, Array], str]:
     family = getattr(mechanism, "family", "stephenson3")
     if family != "stephenson3":
-        raise TypeError(f"solve_all handles the Stephenson-III six-bar, not {family!r}")
+        raise TypeError(
+            f"solve_all handles the planar and spherical Stephenson-III six-bars, not {family!r}"
+        )
     missing = [f for f in _POINTS + _SCALARS if not hasattr(mechanism, f)]
     if missing:
         raise TypeError(f"not a Stephenson-III six-bar: no field {', '.join(missing)}")
@@ -167,7 +176,16 @@ def solve_all(mechanism: Any, inputs: ArrayLike) -> AllConfigurations:
     ([1.0, 1.0], [-1.0, -1.0])
     >>> bool(np.nanmax(out.residual) < 1e-14)
     True
+
+    The spherical Stephenson III is answered by
+    :func:`~linkwright.mechanisms.sphere_configs.solve_all_spherical` (up to 4 configurations
+    driven at AB, 8 at FG).
     """
+    if getattr(mechanism, "family", None) == "spherical-stephenson3":
+        # Imported here: sphere_configs builds on this module's AllConfigurations.
+        from linkwright.mechanisms.sphere_configs import solve_all_spherical
+
+        return solve_all_spherical(mechanism, inputs)
     p, driven = _read(mechanism)
     scale = _scale(p)
     theta = np.asarray(inputs, dtype=float)
@@ -223,7 +241,7 @@ def solve_all(mechanism: Any, inputs: ArrayLike) -> AllConfigurations:
     valid = real & np.isfinite(pos["P"]).all(axis=-1)
     if driven == "crank":
         valid = _drop_repeats(pos, valid, scale[..., None, None])
-    pos, valid, sign1, sign2 = _pack(pos, valid, sign1, sign2, slots)
+    pos, valid, sign1, sign2 = pack_slots(pos, valid, sign1, sign2, slots)
 
     s = scale[..., None, None]
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -266,10 +284,14 @@ def _drop_repeats(pos: dict[str, Array], valid: NDArray[np.bool_], scale: Array)
     return valid & ~same.any(axis=-1)
 
 
-def _pack(
-    pos: dict[str, Array], valid: NDArray[np.bool_], sign1: Array, sign2: Array, slots: int
+def pack_slots(
+    pos: dict[str, Array],
+    valid: NDArray[np.bool_],
+    sign1: Array,
+    sign2: Array,
+    slots: int | None = None,
 ) -> tuple[dict[str, Array], NDArray[np.bool_], Array, Array]:
-    """Move the valid configurations to the first slots (stable) and NaN the rest."""
+    """Move the valid configurations to the first ``slots`` slots (stable) and NaN the rest."""
     order = np.argsort(~valid, axis=-1, kind="stable")[..., :slots]
     valid = np.take_along_axis(valid, order, axis=-1)
     keep = valid[..., None]
