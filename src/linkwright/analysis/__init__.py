@@ -1,6 +1,8 @@
 """Analyses: pure functions of a mechanism (and its motion); nothing cached behind your back.
 
-:func:`analyze` gathers the planar analyses into the JSON-ready report of ``linkwright analyze``.
+:func:`analyze` gathers the planar analyses into the JSON-ready report of ``linkwright analyze``;
+a spherical four-bar gets the same report from :mod:`linkwright.analysis.spherical`, with both
+components of paper 003's pressure angle.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from linkwright.analysis import spherical as sph
 from linkwright.analysis.conic import (
     conic_invariants,
     conic_kind,
@@ -36,11 +39,34 @@ from linkwright.analysis.planar import (
     transmission_angle,
     transmission_extremes,
 )
-from linkwright.mechanisms import DoubleSlider, FourBar, GearedFiveBar, SliderCrank, input_range
+from linkwright.analysis.spherical import (
+    InvalidHingeRatio,
+    NotASphericalFourBar,
+    balanced_mu,
+    grashof_terms,
+    input_limits,
+    output_limits,
+    paper003_normal_extremes,
+    paper003_tangential_extremes,
+    pressure_angles,
+    pressure_extremes,
+    spherical_class,
+)
+from linkwright.mechanisms import (
+    DoubleSlider,
+    FourBar,
+    GearedFiveBar,
+    SliderCrank,
+    SphericalFourBar,
+    input_range,
+)
 from linkwright.mechanisms.base import Mechanism
 
 __all__ = [
+    "InvalidHingeRatio",
+    "NotASphericalFourBar",
     "analyze",
+    "balanced_mu",
     "coefficients",
     "conic_invariants",
     "conic_kind",
@@ -50,12 +76,20 @@ __all__ = [
     "fourbar_class",
     "general_report",
     "grashof",
+    "grashof_terms",
+    "input_limits",
     "normalise_conic",
     "output_angle",
     "output_extremes",
+    "output_limits",
     "output_rates",
+    "paper003_normal_extremes",
+    "paper003_tangential_extremes",
     "point_speed",
+    "pressure_angles",
+    "pressure_extremes",
     "slidercrank_class",
+    "spherical_class",
     "stroke",
     "transmission_angle",
     "transmission_extremes",
@@ -67,17 +101,18 @@ def _wrap_deg(x: Any) -> float | None:
     v = float(x)
     if not math.isfinite(v):
         return None
-    return _num(-(((-np.degrees(v)) + 180.0) % 360.0 - 180.0))
+    # + 0.0 turns the −0.0 that the wrap gives for 0° into 0.0.
+    return _num(-(((-np.degrees(v)) + 180.0) % 360.0 - 180.0) + 0.0)
 
 
-def analyze(mechanism: Mechanism) -> dict[str, Any]:
+def analyze(mechanism: Mechanism, mu: float | None = None) -> dict[str, Any]:
     """The full kinematic report of one mechanism, in degrees (JSON-ready).
 
-    Four-bars and slider-cranks get paper 003's report below. Every other family gets
-    :func:`general_report` (limit positions, each dyad's transmission angle, the traced points'
-    speed), plus for a geared five-bar its ``locking`` (paper 002: whether and between which
-    inputs it oscillates) and for a double slider its ``ellipse`` (paper 004: centre, semi-axes,
-    orientation and the normalised conic A..F of eq. 3).
+    Four-bars (planar and spherical) and slider-cranks get paper 003's report below. Every other
+    family gets :func:`general_report` (limit positions, each dyad's transmission angle, the
+    traced points' speed), plus for a geared five-bar its ``locking`` (paper 002: whether and
+    between which inputs it oscillates) and for a double slider its ``ellipse`` (paper 004:
+    centre, semi-axes, orientation and the normalised conic A..F of eq. 3).
 
     Angles of the input (φ1) and output (φ3) are measured from the frame line A0→B0 as in paper
     003 (for a slider-crank: from the slider's line direction), counter-clockwise.
@@ -89,6 +124,15 @@ def analyze(mechanism: Mechanism) -> dict[str, Any]:
     ``output_range`` and ``stroke`` (slider-crank, lengths), ``transmission_angle_deg``
     (``min``, ``max`` and the inputs where they occur), ``pressure_angle_deg`` (90° − γ),
     ``time_ratio``, ``coefficients`` (``K_omega``, ``K_epsilon``, ``K_p``, ``delta``).
+
+    A spherical four-bar (paper 003's α1..α4 = crank, coupler, rocker, frame arcs; φ1 from the
+    frame circle towards B0, φ3 about +OB0 from the frame circle beyond B0) gets the same keys,
+    with ``grashof_terms_deg`` (F1..F4 of :func:`grashof_terms`) in place of ``grashof``, and a
+    ``pressure_angle_deg`` of two components: ``normal`` and ``tangential``, each ``min``,
+    ``max`` and the inputs there, for the hinge-radius ratio ``mu`` = OB/OA (the argument; by
+    default paper 003's balanced μ, :func:`balanced_mu`), with ``mu`` and ``mu_source``
+    (``"given"`` or ``"balanced"``; ``"none"`` when no positive μ balances, and the components
+    are null).
 
     Examples
     --------
@@ -107,9 +151,30 @@ def analyze(mechanism: Mechanism) -> dict[str, Any]:
     >>> r = analyze(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3))
     >>> r["assembles"], r["reason"], r["swing_deg"], r["coefficients"]["K_omega"]
     (False, 'the coupler and rocker cannot reach each other at any input', None, None)
+
+    Paper 003's first spherical crank-rocker (Table 1: Kω 1.71, Kε 5.65; Table 2: μ 0.517,
+    ν_n 23.73 / −11.25, ν_τ 3.18 / −3.19):
+
+    >>> r = analyze(SphericalFourBar(*np.radians([90, 15, 60, 80])))
+    >>> r["class"], [round(x, 3) for x in r["output_range_deg"]], round(r["swing_deg"], 3)
+    ('crank-rocker', [105.237, 135.891], 30.654)
+    >>> {k: round(v, 3) for k, v in r["coefficients"].items() if v is not None}
+    {'K_omega': 1.711, 'K_epsilon': 5.653, 'K_p': 5.154}
+    >>> p = r["pressure_angle_deg"]
+    >>> round(p["mu"], 5), p["mu_source"]
+    (0.51714, 'balanced')
+    >>> [round(p[c][k], 2) for c in ("normal", "tangential") for k in ("max", "min")]
+    [23.73, -11.25, 3.19, -3.19]
     """
     if mechanism.batch_shape != ():
         raise ValueError("analyze reports on one mechanism; index the batch first")
+    if isinstance(mechanism, SphericalFourBar):
+        return _report_spherical(mechanism, mu)
+    if mu is not None:
+        raise InvalidHingeRatio(
+            f"mu: the hinge-radius ratio applies to a spherical four-bar, not to a "
+            f"{mechanism.family}"
+        )
     arcs = input_range(mechanism)
     is_fourbar = isinstance(mechanism, FourBar)
     if is_fourbar:
@@ -176,6 +241,89 @@ def analyze(mechanism: Mechanism) -> dict[str, Any]:
         "max": _num(90.0 - np.degrees(tx["min"])),
     }
     co = coefficients(mechanism, extremes=ext)
+    report["time_ratio"] = _num(co["time_ratio"])
+    report["coefficients"] = {k: _num(co[k]) for k in ("K_omega", "K_epsilon", "K_p", "delta")}
+    return report
+
+
+def _limits_deg(arcs: Any) -> tuple[list[list[float | None]], list[float | None]]:
+    """Input arcs (φ1 in degrees, each start wrapped to (−180, 180]) and their ends."""
+    rel = [
+        [_wrap_deg(lo), _num(np.degrees(hi - lo)) + _wrap_deg(lo)]  # type: ignore[operator]
+        for lo, hi in zip(arcs.lo, arcs.hi, strict=True)
+        if math.isfinite(lo)
+    ]
+    return rel, [a for arc in rel for a in arc]
+
+
+def _report_spherical(fb: SphericalFourBar, mu: float | None) -> dict[str, Any]:
+    """Paper 003's report of one spherical four-bar (see :func:`analyze`)."""
+    arcs = sph.input_limits(fb)
+    report: dict[str, Any] = {
+        "family": fb.family,
+        "class": str(sph.spherical_class(fb)),
+        "grashof_terms_deg": [_deg(f) for f in sph.grashof_terms(fb)],
+        "assembles": not bool(arcs.never),
+        "reference_angle_deg": 0.0,
+    }
+    if mu is None:
+        mu_value = float(sph.balanced_mu(fb))
+        source = "balanced" if math.isfinite(mu_value) else "none"
+    else:
+        mu_value = float(sph._mu(fb, mu))
+        source = "given"
+    empty = {"min": None, "max": None, "min_at_input_deg": None, "max_at_input_deg": None}
+    pressure: dict[str, Any] = {
+        "normal": dict(empty),
+        "tangential": dict(empty),
+        "mu": _num(mu_value),
+        "mu_source": source,
+    }
+    if arcs.never:
+        report["reason"] = "the coupler and rocker cannot reach each other at any input"
+        for key in ("input_range_deg", "output_range_deg", "swing_deg", "time_ratio"):
+            report[key] = None
+        report["input_arcs_deg"] = []
+        report["limit_positions_deg"] = []
+        report["transmission_angle_deg"] = dict(empty)
+        report["pressure_angle_deg"] = pressure
+        report["coefficients"] = dict.fromkeys(("K_omega", "K_epsilon", "K_p", "delta"))
+        return report
+    rel, ends = _limits_deg(arcs)
+    report["input_range_deg"] = None if arcs.full else rel[0]
+    report["input_arcs_deg"] = [] if arcs.full else rel
+    report["limit_positions_deg"] = ends
+    ext = sph.output_extremes(fb)
+    rocking = not bool(ext["turns"])
+    report["output_range_deg"] = [_deg(ext["min"]), _deg(ext["max"])] if rocking else None
+    report["swing_deg"] = _deg(ext["max"] - ext["min"]) if rocking else None
+    tx = sph.transmission_extremes(fb)
+    report["transmission_angle_deg"] = {
+        "min": _deg(tx["min"]),
+        "max": _deg(tx["max"]),
+        "min_at_input_deg": _wrap_deg(tx["min_at"]),
+        "max_at_input_deg": _wrap_deg(tx["max_at"]),
+    }
+    if source != "none":
+        nu = sph.pressure_extremes(fb, mu_value)
+
+        def where(x: Any) -> float | None:
+            # A flat extreme's value is exact but its input only to ~√eps (1e-6°): say no more.
+            w = _wrap_deg(x)
+            if w is None:
+                return None
+            w = round(w, 5) + 0.0
+            return 180.0 if w == -180.0 else w
+
+        for part in ("normal", "tangential"):
+            pressure[part] = {
+                "min": _deg(nu[f"{part}_min"]),
+                "max": _deg(nu[f"{part}_max"]),
+                "min_at_input_deg": where(nu[f"{part}_min_at"]),
+                "max_at_input_deg": where(nu[f"{part}_max_at"]),
+            }
+    report["pressure_angle_deg"] = pressure
+    co = coefficients(fb, extremes=ext)
     report["time_ratio"] = _num(co["time_ratio"])
     report["coefficients"] = {k: _num(co[k]) for k in ("K_omega", "K_epsilon", "K_p", "delta")}
     return report

@@ -1,4 +1,4 @@
-"""Analyses of the planar four-bar and slider-crank.
+"""Analyses of the planar four-bar and slider-crank (and, by dispatch, the spherical four-bar).
 
 Conventions of paper 003 (Dzhavakhyan, Makhsudyan, Arakelyan): L1 crank, L2 coupler, L3 output,
 L4 frame; φ1 and φ3 are measured from the frame line A0→B0; φ3′ = dφ3/dφ1, φ3″ = d²φ3/dφ1².
@@ -6,6 +6,12 @@ L4 frame; φ1 and φ3 are measured from the frame line A0→B0; φ3′ = dφ3/d�
 Every extreme reported here is exact: closed forms where geometry gives them (transmission angle,
 stroke, Grashof limits), otherwise a dense circuit bracket refined by golden section
 (:mod:`linkwright.analysis.extrema`). All functions broadcast over a mechanism's batch shape.
+
+A :class:`~linkwright.mechanisms.SphericalFourBar` given to :func:`fourbar_class`,
+:func:`transmission_angle`, :func:`transmission_extremes`, :func:`output_angle`,
+:func:`output_rates`, :func:`output_extremes` or :func:`coefficients` is handed to
+:mod:`linkwright.analysis.spherical`, so paper 003's coefficients are computed by one code for
+both spaces.
 """
 
 from __future__ import annotations
@@ -13,10 +19,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from linkwright.analysis import spherical as _sph
 from linkwright.analysis.extrema import CIRCUIT_SAMPLES, circuit_extremum
 from linkwright.engine import Motion, evaluate
 from linkwright.geometry import plane
-from linkwright.mechanisms import FourBar, SliderCrank, circuit, input_range
+from linkwright.mechanisms import FourBar, SliderCrank, SphericalFourBar, circuit, input_range
 from linkwright.mechanisms.base import Mechanism
 
 __all__ = [
@@ -65,7 +72,12 @@ def fourbar_class(fb: FourBar) -> NDArray[np.str_]:
     'double-crank'
     >>> str(fourbar_class(FourBar(A0=[0, 0], B0=[4, 0], crank=3, coupler=2, rocker=2.5)))
     'triple-rocker'
+
+    A spherical four-bar is classified by the spherical conditions
+    (:func:`linkwright.analysis.spherical.spherical_class`).
     """
+    if isinstance(fb, SphericalFourBar):
+        return _sph.spherical_class(fb)
     g = grashof(fb)
     links = np.stack(_lengths(fb), axis=-1)
     shortest = np.argmin(links, axis=-1)
@@ -99,7 +111,10 @@ def transmission_angle(mechanism: Mechanism, motion: Motion) -> Array:
     Four-bar: the interior angle at B between B→A and B→B0 (the same in both assembly modes).
     Slider-crank: the angle between the rod B→A and the normal of the slider's line (the line's
     direction turned +90°); its pressure angle 90° − γ keeps the side the rod leans to.
+    Spherical four-bar: the angle at B between the great circles B→A and B→B0.
     """
+    if isinstance(mechanism, SphericalFourBar):
+        return _sph.transmission_angle(mechanism, motion)
     A, B = motion.positions["A"], motion.positions["B"]
     u = A - B
     if isinstance(mechanism, FourBar):
@@ -119,7 +134,10 @@ def transmission_extremes(mechanism: Mechanism) -> dict[str, Array]:
 
     Returns ``min``, ``max`` (radians) and ``min_at``, ``max_at`` (input angles, radians; for a
     linkage that reaches the extreme at two symmetric inputs, the one in [0, π]).
+    Spherical four-bar: :func:`linkwright.analysis.spherical.transmission_extremes`.
     """
+    if isinstance(mechanism, SphericalFourBar):
+        return _sph.transmission_extremes(mechanism)
     arcs = input_range(mechanism)
     if isinstance(mechanism, FourBar):
         L1, L2, L3, L4 = _lengths(mechanism)
@@ -170,8 +188,14 @@ def transmission_extremes(mechanism: Mechanism) -> dict[str, Array]:
     return {k: np.where(never, np.nan, v) for k, v in out.items()}
 
 
-def output_angle(fb: FourBar, motion: Motion) -> Array:
-    """φ3: the angle of B − B0 measured from the frame line A0→B0 (radians, in (−π, π])."""
+def output_angle(fb: FourBar | SphericalFourBar, motion: Motion) -> Array:
+    """φ3: the angle of B − B0 measured from the frame line A0→B0 (radians, in (−π, π]).
+
+    Spherical four-bar: the angle of B about +OB0 from the frame circle beyond B0
+    (:meth:`~linkwright.mechanisms.SphericalFourBar.output_angle`).
+    """
+    if isinstance(fb, SphericalFourBar):
+        return fb.output_angle(motion)
     rel = motion.positions["B"] - motion.positions["B0"]
     ang = np.arctan2(rel[..., 1], rel[..., 0]) - fb.frame_angle[..., None]
     return np.angle(np.exp(1j * ang))
@@ -182,8 +206,11 @@ def output_rates(mechanism: Mechanism, motion: Motion) -> tuple[Array, Array]:
 
     Four-bar: φ3′, φ3″ from B's velocity and acceleration: for a point on a circle about B0,
     (B − B0) × B′ = φ3′ r² and (B − B0) × B″ = φ3″ r². Slider-crank: s′, s″ of the slider
-    position along its line.
+    position along its line. Spherical four-bar: φ3′, φ3″ from
+    :func:`linkwright.analysis.spherical.output_rates`.
     """
+    if isinstance(mechanism, SphericalFourBar):
+        return _sph.output_rates(mechanism, motion)
     vel, acc = motion.velocities["B"], motion.accelerations["B"]  # type: ignore[index]
     if isinstance(mechanism, FourBar):
         rel = motion.positions["B"] - motion.positions["B0"]
@@ -199,7 +226,11 @@ def output_extremes(mechanism: Mechanism, *, motion: Motion | None = None) -> di
     Returns ``min``, ``max``, ``min_at``, ``max_at`` (radians, or lengths for a slider) and
     ``turns`` (True where a four-bar's output turns fully, so it has no extremes). ``motion`` is
     the mechanism's circuit (order 2, :data:`CIRCUIT_SAMPLES`) when the caller already has it.
+    A spherical four-bar's extremes are closed forms
+    (:func:`linkwright.analysis.spherical.output_extremes`).
     """
+    if isinstance(mechanism, SphericalFourBar):
+        return _sph.output_extremes(mechanism, motion=motion)
     if motion is None:
         motion = circuit(mechanism, CIRCUIT_SAMPLES)
     shape = motion.shape[:-1]
@@ -288,8 +319,21 @@ def coefficients(
     Returns ``K_omega``, ``K_epsilon``, ``K_p``, ``delta`` and ``phi_psi``, ``psi`` (radians or
     length), ``time_ratio`` (≥ 1, NaN for a double crank). ``extremes`` is
     :func:`output_extremes` of the mechanism when the caller already has it.
+
+    A spherical four-bar gets the same formulas, φ1 its input and φ3 its output angle (the crank
+    rotation φΨ on the arc containing φ1 = 0, which is the frame circle towards B0).
+
+    Examples
+    --------
+    Paper 003's Table 3, first cell, with the crank arc read as 100° (printed: Kω 1.27,
+    Kε 2.97, Kp 3.11, δ 0.54):
+
+    >>> fb = SphericalFourBar(*np.radians([10, 100, 65, 50]))
+    >>> {k: round(float(v), 4) for k, v in coefficients(fb).items() if k[0] in "Kd"}
+    {'K_omega': 1.2742, 'K_epsilon': 2.9666, 'K_p': 3.1078, 'delta': 0.538}
     """
-    arcs = input_range(mechanism)
+    spherical = isinstance(mechanism, SphericalFourBar)
+    arcs = _sph.input_limits(mechanism) if spherical else input_range(mechanism)
     motion = circuit(mechanism, CIRCUIT_SAMPLES)
     ext = output_extremes(mechanism, motion=motion) if extremes is None else extremes
 
@@ -309,7 +353,12 @@ def coefficients(
     w_max, e_max, p_max = absmax(rate1), absmax(rate2), absmax(power)
     w_hi = circuit_extremum(mechanism, rate1, motion=motion)[0]
     w_lo = circuit_extremum(mechanism, rate1, sign=-1.0, motion=motion)[0]
-    through = mechanism.frame_angle if isinstance(mechanism, FourBar) else mechanism.line_angle
+    if spherical:
+        through = np.zeros(np.shape(w_max))
+    elif isinstance(mechanism, FourBar):
+        through = mechanism.frame_angle
+    else:
+        through = mechanism.line_angle
     phi_psi = _crank_rotation_between(ext["min_at"], ext["max_at"], np.asarray(through))
     psi = ext["max"] - ext["min"]
     rocking = arcs.full & ~ext["turns"]
