@@ -357,3 +357,15 @@ def test_rigid_step_derivatives_are_exact_on_a_rotating_body():
     p = m.positions["P"]
     assert np.allclose(m.velocities["P"], sphere.cross(axis, p), atol=1e-15)
     assert np.allclose(m.accelerations["P"], sphere.cross(axis, sphere.cross(axis, p)), atol=1e-15)
+
+
+def test_dyad_with_pivots_one_ulp_apart_still_meets_both_arcs():
+    """A change point whose crank passes through B0: at θ = 0 the pivots A and B0 differ only by
+    rounding, the direction between them is noise, and B must still lie on both circles."""
+    r5 = np.radians(5.0)
+    below = np.nextafter(r5, 0.0)
+    mech = SphericalFourBar(below, r5, below, below)
+    m = solve(mech, [0.0, 1e-9, 0.1])
+    assert m.valid.all()
+    for name, err in mech.residuals(m).items():
+        assert np.max(np.abs(err)) < 1e-12, name

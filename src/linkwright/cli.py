@@ -584,14 +584,33 @@ def curve_document(doc: Document, points: int = 360) -> dict[str, Any]:
 
 
 @app.command()
-def analyze(file: FileArg, as_json: JsonOpt = False) -> None:
+def analyze(
+    file: FileArg,
+    mu: Annotated[
+        float | None,
+        typer.Option(
+            "--mu",
+            metavar="RATIO",
+            help="Spherical four-bar: hinge-radius ratio OB/OA for paper 003's pressure-angle "
+            "components (default: the balanced ratio of its quadratic).",
+            show_default=False,
+        ),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
     """Type, ranges, transmission angle, time ratio and coefficients of the mechanism."""
     doc = _load(file)
     try:
         from linkwright.analysis import analyze as run_analysis
     except ImportError as exc:
         raise CliError(f"the analysis module is not available ({exc})") from None
-    result = _jsonable(run_analysis(doc.mechanism))
+    if mu is not None and doc.family != "spherical-fourbar":
+        raise CliError(f"--mu: only a spherical-fourbar has a hinge-radius ratio ({doc.family})")
+    try:
+        report = run_analysis(doc.mechanism) if mu is None else run_analysis(doc.mechanism, mu=mu)
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+    result = _jsonable(report)
     if as_json:
         sys.stdout.write(_dump(result))
         return

@@ -1,4 +1,4 @@
-"""``linkwright demo``: pictures and a summary of every bundled example, and paper 003's tables.
+"""``linkwright demo``: pictures and a summary of every bundled example, and the seed papers.
 
 What ``make run`` starts until the browser workbench exists. Everything goes into one folder; the
 function returns the line that says where.
@@ -41,43 +41,6 @@ def _cell(report: dict[str, Any], key: Any) -> str:
     return str(value)
 
 
-def paper003_markdown() -> str:
-    """Paper 003's planar tables as a markdown page, printed values beside ours."""
-    from linkwright.papers.p003 import reproduce_planar
-
-    lines = [
-        "# Paper 003, planar halves of Tables 1, 2 and 4",
-        "",
-        "Printed value beside linkwright's exact one (for the paper's printed inputs). "
-        "`agrees`: within half a unit of the last printed digit, inputs taken within their own "
-        "printed precision; `truncated`: the printed digits are ours cut, not rounded; "
-        "`misprint`: listed in SEED-NOTES.md; `differs`: see the note below.",
-        "",
-        "| table | row | quantity | printed | linkwright | status |",
-        "|---|---|---|---|---|---|",
-    ]
-    cells = reproduce_planar()
-    for c in cells:
-        lines.append(
-            f"| {c.table} | {c.row} | {c.column} | {c.printed} | {c.ours:.4f} | {c.status} |"
-        )
-    differs = [c for c in cells if c.status == "differs"]
-    lines += [
-        "",
-        f"{len(cells)} cells: "
-        + ", ".join(
-            f"{sum(c.status == s for c in cells)} {s}"
-            for s in ("agrees", "agrees (truncated)", "misprint", "differs")
-        )
-        + ".",
-        "",
-        f"The {len(differs)} cells that differ are all max|Kp|, printed 0.1–0.6 % below the "
-        "exact maximum, the direction in which a sampled or smoothed maximum errs. linkwright's "
-        "maxima are checked against a dense closed-form (Freudenstein) sampling in the tests.",
-    ]
-    return "\n".join(lines) + "\n"
-
-
 def _row_view(family: str, report: dict[str, Any]) -> dict[str, Any]:
     """The summary columns for a family without paper 003's report: its family as the class,
     its input arc, and the transmission angle's extremes over all its dyads."""
@@ -104,7 +67,7 @@ def run_demo(out_dir: str | Path = "out") -> str:
     """
     from linkwright.analysis import analyze
     from linkwright.io import list_examples, load_example
-    from linkwright.papers import p002, p004
+    from linkwright.papers import p000, p001, p002, p003, p004
     from linkwright.plot import plot_curves, plot_diagrams, save_figure
     from linkwright.plot.generic import plot_linkage, plot_speed
 
@@ -136,10 +99,11 @@ def run_demo(out_dir: str | Path = "out") -> str:
             + " | ".join(_cell(_row_view(doc.family, report), key) for _, key in SUMMARY_COLUMNS)
             + " |"
         )
-    print(f"[{len(names)}/{len(names)}] paper 003 tables", file=sys.stderr, flush=True)
-    (out / "paper003-planar.md").write_text(paper003_markdown(), encoding="utf-8")
-    print(f"[{len(names)}/{len(names)}] papers 002 and 004", file=sys.stderr, flush=True)
-    extra = len(p002.reproduce(out)) + len(p004.reproduce(out))
+    extra = 0
+    for paper in (p000, p001, p002, p003, p004):
+        number = paper.__name__[-3:]
+        print(f"[{len(names)}/{len(names)}] paper {number}", file=sys.stderr, flush=True)
+        extra += len(paper.reproduce(out))
     header = "| example | title | " + " | ".join(h for h, _ in SUMMARY_COLUMNS) + " |"
     rule = "|" + "---|" * (len(SUMMARY_COLUMNS) + 2)
     summary = [
@@ -153,11 +117,15 @@ def run_demo(out_dir: str | Path = "out") -> str:
         rule,
         *rows,
         "",
-        "Paper 003's planar tables, reproduced: [paper003-planar.md](paper003-planar.md).",
-        "Paper 002's five-bar study: [paper002.md](paper002.md); paper 004's double slider: "
-        "[paper004.md](paper004.md).",
+        "The seed papers regenerated, our numbers beside the printed ones: "
+        "[paper000.md](paper000.md) (spherical coupler curves), "
+        "[paper001.md](paper001.md) (spherical Stephenson III configurations), "
+        "[paper002.md](paper002.md) (geared five-bar), "
+        "[paper003.md](paper003.md) (Tables 1-4, planar and spherical), "
+        "[paper004.md](paper004.md) (double slider). "
+        "What we found wrong in print: `linkwright papers errata`.",
         "",
     ]
     (out / "summary.md").write_text("\n".join(summary), encoding="utf-8")
     (out / "summary.json").write_text(json.dumps(reports, indent=2) + "\n", encoding="utf-8")
-    return f"wrote {2 * len(names) + 3 + extra} files to {out}/ — start with {out / 'summary.md'}"
+    return f"wrote {2 * len(names) + 2 + extra} files to {out}/ — start with {out / 'summary.md'}"

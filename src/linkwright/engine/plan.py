@@ -57,9 +57,6 @@ SINGULAR_MARGIN = 1e-12
 # limit position must not turn the limit itself into a failure); the clamp leaves a constraint
 # residual of the same relative size, far below the 1e-10 promised.
 ASSEMBLY_TOL = 1e-12
-# A sphere dyad whose two pivot axes are closer than this (sine of the angle between them) is
-# degenerate: the direction from one to the other is rounding noise.
-COINCIDENT_SIN = 1e-12
 
 
 @dataclass(frozen=True)
@@ -447,14 +444,18 @@ class SphereDyad:
             margin = g / (sin_d * np.sin(r1)) ** 2
         # An orthonormal frame at P1 (t towards P2, n = P1 × t) built from the vectors, not from
         # sin d, so that X is a unit vector however close P1 and P2 come.
-        t = sphere.unit(p2 - cos_d[..., None] * p1)
+        # (P1 × P2) × P1 is P2's part normal to P1, and stays normal to P1 to rounding even
+        # when it is itself only rounding (P2 − cos d·P1 would not).
+        t = sphere.unit(sphere.cross(w, p1))
         n = sphere.cross(p1, t)
         phi = np.arctan2(sign * np.sqrt(np.clip(g, 0.0, None)), np.cos(r2) - np.cos(r1) * cos_d)
         pos = np.cos(r1)[..., None] * p1 + np.sin(r1)[..., None] * (
             np.cos(phi)[..., None] * t + np.sin(phi)[..., None] * n
         )
-        # Axes P1, P2 parallel to rounding leave X anywhere on its circle: not a position.
-        valid = j1.valid & j2.valid & (margin >= -ASSEMBLY_TOL) & (sin_d > COINCIDENT_SIN)
+        # With P1 and P2 parallel to rounding the frame's direction t is arbitrary but still a
+        # unit vector normal to P1, and the dyad can only close there if r1 ≈ r2 (a change
+        # point, where X may indeed sit anywhere on its circle): X still meets both arcs.
+        valid = j1.valid & j2.valid & (margin >= -ASSEMBLY_TOL) & (sin_d > 0)
         pos = np.where(valid[..., None], pos, np.nan)
         # sin of the angle at X between its two links: 0 at a limit (toggle) position.
         det_rel = sphere.dot(pos, w) / (np.sin(r1) * np.sin(r2))
