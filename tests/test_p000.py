@@ -346,6 +346,9 @@ def test_reproduce_writes_the_figures_and_the_page(tmp_path):
         "p000-fig8.png",
         "p000-fig8.svg",
         "paper000.md",
+        "paper000-point-checks.csv",
+        "paper000-eq5-checks.csv",
+        "paper000-fig8-readings.csv",
     ]
     for path in written:
         assert path.is_file() and path.parent == tmp_path / "out"
@@ -354,9 +357,15 @@ def test_reproduce_writes_the_figures_and_the_page(tmp_path):
         assert image.shape[-1] == 4 and image[..., :3].std() > 0.05
     for path in written[1:6:2]:
         assert ET.parse(path).getroot().tag == "{http://www.w3.org/2000/svg}svg"
-    page = written[-1].read_text(encoding="utf-8")
+    page = written[6].read_text(encoding="utf-8")
     for needed in ("| 6 (crank-rocker) | 40 | 20 | 45 | 35 | 50 | 130 |", "ε = −30°", "Check 1"):
         assert needed in page
     assert "**turns fully**" in page
-    for name in (p.name for p in written[:-1]):
+    for name in (p.name for p in written[:6]):
         assert name in page
+    import csv
+
+    with written[7].open(encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    # The paper's own method (eqs. 6-13, better line of eq. 7) against linkwright's, per curve.
+    assert rows and max(float(r["better"]) for r in rows) < 1e-13

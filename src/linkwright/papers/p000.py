@@ -868,7 +868,9 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
     -------
     list of pathlib.Path
         ``p000-fig6.png``, ``p000-fig6.svg``, ``p000-fig7.png``, ``p000-fig7.svg``,
-        ``p000-fig8.png``, ``p000-fig8.svg`` and ``paper000.md``, in that order.
+        ``p000-fig8.png``, ``p000-fig8.svg``, ``paper000.md`` and the checks' tables as CSV
+        (``paper000-point-checks.csv``, ``paper000-eq5-checks.csv``,
+        ``paper000-fig8-readings.csv``), in that order.
 
     Examples
     --------
@@ -876,7 +878,7 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     print(*(p.name for p in reproduce(tmp, samples=72)))
     p000-fig6.png p000-fig6.svg p000-fig7.png p000-fig7.svg p000-fig8.png p000-fig8.svg
-    paper000.md
+    paper000.md paper000-point-checks.csv paper000-eq5-checks.csv paper000-fig8-readings.csv
     """
     from linkwright.plot.sphere import plot_spherical_linkage
 
@@ -919,7 +921,29 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
     page = out / "paper000.md"
     page.write_text(_markdown(modes, samples, [p.name for p in written]), encoding="utf-8")
     written.append(page)
+    for stem, rows in (
+        ("paper000-point-checks", point_checks(samples)),
+        ("paper000-eq5-checks", eq5_checks(samples)),
+        ("paper000-fig8-readings", modes),
+    ):
+        written.append(_write_csv(out / f"{stem}.csv", rows))
     return written
+
+
+def _write_csv(path: Path, rows: list) -> Path:
+    """One row per check (a dataclass), its fields as the columns; numbers with all digits."""
+    import csv
+    import dataclasses
+
+    names = [f.name for f in dataclasses.fields(rows[0])]
+    with path.open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(names)
+        for row in rows:
+            writer.writerow(
+                [repr(v) if isinstance(v, float) else v for v in (getattr(row, n) for n in names)]
+            )
+    return path
 
 
 def _markdown(modes: list[Fig8Mode], samples: int, pictures: list[str]) -> str:
