@@ -1,15 +1,18 @@
-"""Engine throughput: batched four-bar positions, against a hand-written NumPy closed form.
+"""Engine throughput, every figure against baselines measured in the same run.
 
-Run as ``python bench/run.py`` (``make bench``). Times, best of several repeats:
+Run as ``python bench/run.py`` (``make bench``, which also installs the peers). Cases (issue 5):
 
-* ``solve`` of 10,000 random Grashof crank-rockers (every sample assembled) × 360 inputs,
-  positions only (order 0) and with first and second derivatives (order 2);
-* the baseline of ``bench/baselines.py``: the obvious ten-line NumPy circle–circle intersection,
-  positions only, on the same linkages (and checked to give the same positions);
-* one four-bar × 360 inputs: the latency of a single small call (median of many).
+(a) 10,000 random Grashof crank-rockers × 360 inputs, positions of every moving joint (A, B, P):
+    linkwright's plan (``solve``), its compiled kernel (numba, when installed), the obvious NumPy
+    closed form of ``bench/baselines.py`` and pylinkage (when installed);
+(b) one four-bar × 360 inputs: the latency of a single call, positions and with derivatives;
+(c) 10,000 spherical crank-rockers × 360 inputs (plan, kernel, NumPy closed form);
+(d)–(f) the atlas descriptors, path synthesis and atlas query: their issues are not built yet.
 
-Rates count mechanism-samples (mechanisms × inputs) and joint positions (3 moving joints, A, B
-and P, per mechanism-sample).
+Every contestant's positions are checked against linkwright's plan before anything is timed.
+Rates count joint positions (3 moving joints per mechanism-sample). The bound is memory
+bandwidth: writing A, B, P costs 48 bytes per planar mechanism-sample (72 on the sphere); the
+copy bandwidth is measured in the same run and each rate is given as a fraction of it.
 """
 
 from __future__ import annotations
@@ -20,11 +23,12 @@ import platform
 import statistics
 import sys
 import time
+from collections.abc import Callable
 
 import numpy as np
-from baselines import fourbar_positions
+from baselines import fourbar_positions, spherical_fourbar_positions
 
-from linkwright.mechanisms import FourBar, solve
+from linkwright.mechanisms import FourBar, SphericalFourBar, solve
 
 MOVING_JOINTS = ("A", "B", "P")
 
@@ -49,8 +53,24 @@ def crank_rockers(n: int, seed: int = 0) -> FourBar:
     )
 
 
-def best_of(fn, repeats: int) -> float:
-    fn()  # warm-up: first-touch allocation, caches
+def spherical_crank_rockers(n: int, seed: int = 2) -> SphericalFourBar:
+    """Spherical crank-rockers: crank 10°–20°, frame, coupler and rocker 60°–90° (every input
+    assembles: the arc A B0 stays within the dyad's range), coupler points anywhere."""
+    rng = np.random.default_rng(seed)
+    deg = np.radians
+    return SphericalFourBar(
+        frame=deg(rng.uniform(60, 90, n)),
+        crank=deg(rng.uniform(10, 20, n)),
+        coupler=deg(rng.uniform(60, 90, n)),
+        rocker=deg(rng.uniform(60, 90, n)),
+        point_arc=rng.uniform(0.0, 1.0, n),
+        point_angle=rng.uniform(-np.pi, np.pi, n),
+        assembly=rng.choice([-1.0, 1.0], n),
+    )
+
+
+def best_of(fn: Callable[[], object], repeats: int) -> float:
+    fn()  # warm-up: first-touch allocation, caches, compilation
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
@@ -59,7 +79,7 @@ def best_of(fn, repeats: int) -> float:
     return min(times)
 
 
-def median_of(fn, runs: int) -> float:
+def median_of(fn: Callable[[], object], runs: int) -> float:
     fn()
     times = []
     for _ in range(runs):
@@ -67,6 +87,41 @@ def median_of(fn, runs: int) -> float:
         fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
+
+
+def copy_bandwidth(megabytes: int = 400, repeats: int = 5) -> float:
+    """Bytes per second written by a large ``np.copyto`` (read + write counted as one write,
+    the way the rates below count only what they store)."""
+    src = np.ones(megabytes * 2**20 // 8)
+    dst = np.empty_like(src)
+    t = best_of(lambda: np.copyto(dst, src), repeats)
+    return src.nbytes / t
+
+
+def check(name: str, got, reference: dict[str, np.ndarray], tol: float) -> None:
+    worst = max(
+        float(np.nanmax(np.abs(np.asarray(g) - reference[j])))
+        for j, g in zip(MOVING_JOINTS, got, strict=True)
+    )
+    if not worst < tol:
+        raise SystemExit(f"{name} disagrees with linkwright's plan by {worst:g}")
+
+
+def optional_kernels():
+    try:
+        from linkwright.engine import kernels
+    except ImportError:
+        return None
+    return kernels if kernels.available() else None
+
+
+def optional_peers():
+    try:
+        import peers
+        import pylinkage  # noqa: F401 - the peer itself, not only its adapter
+    except ImportError:
+        return None
+    return peers
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -78,78 +133,149 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     n, s = args.mechanisms, args.samples
     start = time.perf_counter()
-
-    m = crank_rockers(n)
+    kernels = optional_kernels()
+    peers = optional_peers()
     theta = np.linspace(-np.pi, np.pi, s, endpoint=False)
+    bandwidth = copy_bandwidth()
+
+    # (a) planar batch
+    m = crank_rockers(n)
     p = {k: np.asarray(v) for k, v in m.params().items()}
+    planar_args = tuple(p[k] for k in ("A0", "B0", "crank", "coupler", "rocker", "u", "v"))
+    planar_args += (p["assembly"],)
+    reference = solve(m, theta, order=0)
+    assert reference.valid.all(), "the benchmark linkages must all be crank-rockers"
+    ref = {j: reference.positions[j] for j in MOVING_JOINTS}
+    del reference
+    cases_a: list[tuple[str, Callable[[], object]]] = [
+        ("linkwright solve (plan), positions", lambda: solve(m, theta, order=0)),
+        ("linkwright solve (plan), + derivatives", lambda: solve(m, theta, order=2)),
+    ]
+    if kernels is not None:
+        out = tuple(np.empty((n, s, 2)) for _ in MOVING_JOINTS)
+        check("the kernel", kernels.fourbar_positions(*planar_args, theta), ref, 1e-9)
+        cases_a.insert(
+            0,
+            (
+                "linkwright kernel (numba), positions",
+                lambda: kernels.fourbar_positions(*planar_args, theta, out=out),
+            ),
+        )
+    cases_a.append(("numpy closed form (baseline)", lambda: fourbar_positions(*planar_args, theta)))
+    check("the numpy baseline", fourbar_positions(*planar_args, theta), ref, 1e-9)
+    if peers is not None:
+        ensemble = peers.build_ensemble(m, theta)
+        check("pylinkage", peers.pylinkage_ensemble(ensemble, theta), ref, 1e-9)
+        cases_a.append(
+            ("pylinkage Ensemble.simulate", lambda: peers.pylinkage_ensemble(ensemble, theta))
+        )
+    del ref
+    times_a = [(name, best_of(fn, args.repeats)) for name, fn in cases_a]
 
-    def baseline():
-        return fourbar_positions(
-            p["A0"], p["B0"], p["crank"], p["coupler"], p["rocker"], p["u"], p["v"],
-            p["assembly"], theta,
-        )  # fmt: skip
-
-    # Same answer before timing anything: every sample assembled, positions agree.
-    motion = solve(m, theta, order=0)
-    assert motion.valid.all(), "the benchmark linkages must all be crank-rockers"
-    worst = max(
-        float(np.max(np.abs(motion.positions[j] - ref)))
-        for j, ref in zip(MOVING_JOINTS, baseline(), strict=True)
-    )
-    assert worst < 1e-9, f"linkwright and the baseline disagree by {worst:g}"
-    del motion
-
-    rows = []
-    t_base = best_of(baseline, args.repeats)
-    for order in (0, 2):
-        t = best_of(lambda order=order: solve(m, theta, order=order), args.repeats)
-        rows.append((f"linkwright solve, order={order}", t))
-    rows.append(("numpy closed form (baseline)", t_base))
-
+    # (b) one four-bar
     one = crank_rockers(1, seed=1)
     one = FourBar(**{k: np.asarray(v)[0] for k, v in one.params().items()})
-    latency = {order: median_of(lambda order=order: solve(one, theta, order=order),
-                                args.latency_runs) for order in (0, 2)}  # fmt: skip
-    t_base_one = median_of(
-        lambda: fourbar_positions(
-            *(np.asarray(v)[None] for v in (one.A0, one.B0)),
-            *(np.asarray(getattr(one, k))[None] for k in ("crank", "coupler", "rocker", "u", "v")),
-            np.asarray(one.assembly)[None], theta,
-        ),
-        args.latency_runs,
-    )  # fmt: skip
+    q = {k: np.asarray(v)[None] for k, v in one.params().items()}
+    one_args = tuple(q[k] for k in ("A0", "B0", "crank", "coupler", "rocker", "u", "v"))
+    one_args += (q["assembly"],)
+    cases_b: list[tuple[str, Callable[[], object]]] = [
+        ("linkwright solve (plan), positions", lambda: solve(one, theta, order=0)),
+        ("linkwright solve (plan), + derivatives", lambda: solve(one, theta, order=2)),
+    ]
+    if kernels is not None:
+        out1 = tuple(np.empty((1, s, 2)) for _ in MOVING_JOINTS)
+        cases_b.insert(
+            0,
+            (
+                "linkwright kernel (numba), positions",
+                lambda: kernels.fourbar_positions(*one_args, theta, out=out1),
+            ),
+        )
+    cases_b.append(("numpy closed form (baseline)", lambda: fourbar_positions(*one_args, theta)))
+    if peers is not None:
+        single = peers.build_single(one, theta)
+        ref_one = {j: solve(one, theta, order=0).positions[j] for j in MOVING_JOINTS}
+        check("pylinkage (single)", peers.pylinkage_single(single, theta), ref_one, 1e-9)
+        cases_b.append(("pylinkage step_fast", lambda: peers.pylinkage_single(single, theta)))
+    times_b = [(name, median_of(fn, args.latency_runs)) for name, fn in cases_b]
 
-    samples = n * s
+    # (c) spherical batch
+    sm = spherical_crank_rockers(n)
+    sp = {k: np.asarray(v) for k, v in sm.params().items()}
+    sphere_args = tuple(
+        sp[k]
+        for k in ("frame", "crank", "coupler", "rocker", "point_arc", "point_angle", "assembly")
+    )
+    reference = solve(sm, theta, order=0)
+    assert reference.valid.all(), "the spherical benchmark linkages must all assemble"
+    sref = {j: reference.positions[j] for j in MOVING_JOINTS}
+    del reference
+    check("the spherical numpy baseline", spherical_fourbar_positions(*sphere_args, theta), sref,
+          1e-12)  # fmt: skip
+    cases_c: list[tuple[str, Callable[[], object]]] = [
+        ("linkwright solve (plan), positions", lambda: solve(sm, theta, order=0)),
+    ]
+    if kernels is not None:
+        sout = tuple(np.empty((n, s, 3)) for _ in MOVING_JOINTS)
+        check("the spherical kernel", kernels.spherical_fourbar_positions(*sphere_args, theta),
+              sref, 1e-12)  # fmt: skip
+        cases_c.insert(
+            0,
+            (
+                "linkwright kernel (numba), positions",
+                lambda: kernels.spherical_fourbar_positions(*sphere_args, theta, out=sout),
+            ),
+        )
+    cases_c.append(
+        ("numpy closed form (baseline)", lambda: spherical_fourbar_positions(*sphere_args, theta))
+    )
+    del sref
+    times_c = [(name, best_of(fn, args.repeats)) for name, fn in cases_c]
+
     print()
-    print(f"linkwright engine benchmark: {n:,} Grashof crank-rockers x {s} inputs per call")
+    print("linkwright benchmark (issue 5): every figure measured in this run")
     print(
-        f"numpy {np.__version__}, Python {platform.python_version()}, "
-        f"{platform.machine()}, {os.cpu_count()} CPUs; best of {args.repeats} repeats"
+        f"numpy {np.__version__}, Python {platform.python_version()}, {platform.machine()}, "
+        f"{os.cpu_count()} CPUs; batches best of {args.repeats}, single calls median of "
+        f"{args.latency_runs}"
     )
+    if kernels is not None:
+        import numba
+
+        print(f"kernels: numba {numba.__version__}, {numba.get_num_threads()} threads")
+    else:
+        print("kernels: numba not installed (pip install 'linkwright[fast]')")
+    if peers is not None:
+        print("peers: " + ", ".join(f"{k} {v}" for k, v in peers.peer_versions().items()))
+    else:
+        print("peers: pylinkage not installed (make bench installs it)")
+    print(f"copy bandwidth: {bandwidth / 1e9:.1f} GB/s")
+    samples = n * s
+    for title, rows, width in (
+        (f"(a) {n:,} planar crank-rockers x {s} inputs", times_a, 48),
+        (f"(c) {n:,} spherical crank-rockers x {s} inputs", times_c, 72),
+    ):
+        base = dict(rows)["numpy closed form (baseline)"]
+        bound = len(MOVING_JOINTS) * bandwidth / width
+        print()
+        print(f"{title}; bandwidth bound {bound:.2e} joint positions/s ({width} B per sample)")
+        head = f"{'':<42} {'time [s]':>9} {'joint pos/s':>12} {'of bound':>9} {'vs numpy':>9}"
+        print(head)
+        print("-" * len(head))
+        for name, t in rows:
+            rate = len(MOVING_JOINTS) * samples / t
+            print(f"{name:<42} {t:>9.4f} {rate:>12.3e} {rate / bound:>8.1%} {base / t:>8.2f}x")
     print()
-    head = (
-        f"{'case':<32} {'time [s]':>9} {'mech-samples/s':>15} {'joint positions/s':>18} "
-        f"{'time / baseline':>16}"
-    )
+    print(f"(b) one planar four-bar x {s} inputs")
+    base = dict(times_b)["numpy closed form (baseline)"]
+    head = f"{'':<42} {'time [us]':>10} {'vs numpy':>9}"
     print(head)
     print("-" * len(head))
-    for name, t in rows:
-        print(
-            f"{name:<32} {t:>9.3f} {samples / t:>15.3e} {len(MOVING_JOINTS) * samples / t:>18.3e} "
-            f"{t / t_base:>15.2f}x"
-        )
+    for name, t in times_b:
+        print(f"{name:<42} {t * 1e6:>10.1f} {base / t:>8.2f}x")
     print()
-    print(f"single four-bar x {s} inputs (median of {args.latency_runs} calls):")
-    for order, t in latency.items():
-        print(f"  linkwright solve, order={order}   {t * 1e6:9.1f} us")
-    print(f"  numpy closed form (baseline)  {t_base_one * 1e6:9.1f} us")
-    print()
-    ratio = (samples / rows[0][1]) / (samples / t_base)
-    print(
-        f"rate ratio linkwright/baseline (positions): {ratio:.2f} "
-        f"(linkwright takes {1 / ratio:.2f}x the baseline's time); "
-        f"positions agree to {worst:.1e}; total {time.perf_counter() - start:.1f} s"
-    )
+    print("(d) atlas descriptors, (e) path synthesis, (f) atlas query: not built yet (issues 6, 7)")
+    print(f"total {time.perf_counter() - start:.1f} s")
     return 0
 
 
