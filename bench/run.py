@@ -184,13 +184,14 @@ def main(argv: list[str] | None = None) -> int:
     ]
     if kernels is not None:
         out1 = tuple(np.empty((1, s, 2)) for _ in MOVING_JOINTS)
-        cases_b.insert(
-            0,
+        curve = kernels.prepared_fourbar(*one_args, theta)
+        cases_b[:0] = [
+            ("linkwright kernel, prepared call", curve),
             (
-                "linkwright kernel (numba), positions",
+                "linkwright kernel, checked call",
                 lambda: kernels.fourbar_positions(*one_args, theta, out=out1),
             ),
-        )
+        ]
     cases_b.append(("numpy closed form (baseline)", lambda: fourbar_positions(*one_args, theta)))
     if peers is not None:
         single = peers.build_single(one, theta)

@@ -197,3 +197,32 @@ def test_available_and_interpreted_fallback(monkeypatch):
     plain = positions(mech, theta)
     for k in compiled:
         np.testing.assert_allclose(plain[k], compiled[k], rtol=0, atol=1e-15)
+
+
+def test_prepared_fourbar_repeats_the_batched_kernel():
+    """The latency path (checked once, serial, outputs reused) gives the batched kernel's numbers
+    on every call, also after the outputs were overwritten in between."""
+    from linkwright.engine.kernels import fourbar_positions, prepared_fourbar
+
+    rng = np.random.default_rng(7)
+    theta = np.linspace(-np.pi, np.pi, 97, endpoint=False)
+    for n in (1, 5):
+        args = (
+            rng.uniform(-1, 1, (n, 2)),
+            rng.uniform(-1, 1, (n, 2)) + 2.0,
+            rng.uniform(0.1, 0.3, n),
+            rng.uniform(1.5, 2.5, n),
+            rng.uniform(1.5, 2.5, n),
+            rng.uniform(-1, 1, n),
+            rng.uniform(-1, 1, n),
+            rng.choice([-1.0, 1.0], n),
+        )
+        want = fourbar_positions(*args, theta)
+        curve = prepared_fourbar(*args, theta)
+        first = [a.copy() for a in curve()]
+        for a in curve():
+            a[...] = 0.0
+        again = curve()
+        for w, f, g in zip(want, first, again, strict=True):
+            np.testing.assert_array_equal(w, f)
+            np.testing.assert_array_equal(w, g)

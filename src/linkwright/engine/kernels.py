@@ -24,6 +24,7 @@ same loops run as plain Python (correct, but only fit for a handful of samples).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -36,6 +37,7 @@ __all__ = [
     "available",
     "fourbar_positions",
     "positions",
+    "prepared_fourbar",
     "spherical_fourbar_positions",
 ]
 
@@ -214,17 +216,18 @@ def available() -> bool:
     return _numba() is not None
 
 
-def _kernel(name: str) -> Any:
-    if name not in _KERNELS:
+def _kernel(name: str, parallel: bool = True) -> Any:
+    key = f"{name}-{'parallel' if parallel else 'serial'}"
+    if key not in _KERNELS:
         plain = {"planar": _planar_kernel, "sphere": _spherical_kernel}[name]
         numba = _numba()
         if numba is None:
-            _KERNELS[name] = plain
+            _KERNELS[key] = plain
         else:
             global prange
             prange = numba.prange  # resolved as a global when numba compiles the loops
-            _KERNELS[name] = numba.njit(cache=True, fastmath=False, parallel=True)(plain)
-    return _KERNELS[name]
+            _KERNELS[key] = numba.njit(cache=True, fastmath=False, parallel=parallel)(plain)
+    return _KERNELS[key]
 
 
 def _theta(theta: ArrayLike) -> tuple[Array, Array]:
@@ -350,6 +353,59 @@ def fourbar_positions(
         p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, A, B, P,
     )  # fmt: skip
     return A, B, P
+
+
+def prepared_fourbar(
+    A0: ArrayLike,
+    B0: ArrayLike,
+    crank: ArrayLike,
+    coupler: ArrayLike,
+    rocker: ArrayLike,
+    u: ArrayLike,
+    v: ArrayLike,
+    assembly: ArrayLike,
+    theta: ArrayLike,
+) -> Callable[[], Triple]:
+    """A zero-argument call that recomputes :func:`fourbar_positions` for fixed arguments.
+
+    Everything that does not change between calls (checks, broadcasting, the sines and cosines
+    of θ, the output arrays) is done once here; each call is then one compiled pass, without
+    threads (starting them costs more than one short curve). This is the latency path: an
+    interactive tool redrawing one curve as a dimension is dragged re-prepares only when the
+    dimension changes. The returned arrays are overwritten by the next call.
+
+    Examples
+    --------
+    >>> curve = prepared_fourbar([0, 0], [4, 0], 1, 5, 3.5, 2.5, 1.0, 1, [0.0, np.pi])
+    >>> A, B, P = curve()
+    >>> B[0].round(6)
+    array([[4.625   , 3.443744],
+           [2.775   , 3.278624]])
+    """
+    p = _per_mechanism(
+        dict(
+            A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=assembly
+        ),
+        frozenset({"A0", "B0"}),
+    )
+    for k in ("crank", "coupler", "rocker"):
+        if np.any(p[k] <= 0):
+            raise KernelInputError(f"{k}: must be a positive length")
+    _check_signs(p["assembly"])
+    cos_t, sin_t = _theta(theta)
+    n = p["crank"].shape[0]
+    A, B, P = _outputs(None, (n, cos_t.shape[0], 2))
+    kernel = _kernel("planar", parallel=n > 1)
+    args = (
+        p["A0"], p["B0"], p["crank"], p["coupler"], p["rocker"], p["u"], p["v"],
+        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, A, B, P,
+    )  # fmt: skip
+
+    def run() -> Triple:
+        kernel(*args)
+        return A, B, P
+
+    return run
 
 
 def spherical_fourbar_positions(
