@@ -286,6 +286,26 @@ def _outputs(out: Triple | None, shape: tuple[int, ...]) -> Triple:
     return out[0], out[1], out[2]
 
 
+def _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out) -> tuple:
+    """The planar kernel's arguments, checked and broadcast, its outputs last."""
+    p = _per_mechanism(
+        dict(
+            A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=assembly
+        ),
+        frozenset({"A0", "B0"}),
+    )
+    for k in ("crank", "coupler", "rocker"):
+        if np.any(p[k] <= 0):
+            raise KernelInputError(f"{k}: must be a positive length")
+    _check_signs(p["assembly"])
+    cos_t, sin_t = _theta(theta)
+    outputs = _outputs(out, (p["crank"].shape[0], cos_t.shape[0], 2))
+    return (
+        p["A0"], p["B0"], p["crank"], p["coupler"], p["rocker"], p["u"], p["v"],
+        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, *outputs,
+    )  # fmt: skip
+
+
 def fourbar_positions(
     A0: ArrayLike,
     B0: ArrayLike,
@@ -335,24 +355,9 @@ def fourbar_positions(
     >>> A, B
     (array([[[nan, nan]]]), array([[[nan, nan]]]))
     """
-    p = _per_mechanism(
-        dict(
-            A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=assembly
-        ),
-        frozenset({"A0", "B0"}),
-    )
-    for k in ("crank", "coupler", "rocker"):
-        if np.any(p[k] <= 0):
-            raise KernelInputError(f"{k}: must be a positive length")
-    _check_signs(p["assembly"])
-    cos_t, sin_t = _theta(theta)
-    n = p["crank"].shape[0]
-    A, B, P = _outputs(out, (n, cos_t.shape[0], 2))
-    _kernel("planar")(
-        p["A0"], p["B0"], p["crank"], p["coupler"], p["rocker"], p["u"], p["v"],
-        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, A, B, P,
-    )  # fmt: skip
-    return A, B, P
+    args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out)
+    _kernel("planar")(*args)
+    return args[-3:]
 
 
 def prepared_fourbar(
@@ -382,28 +387,13 @@ def prepared_fourbar(
     array([[4.625   , 3.443744],
            [2.775   , 3.278624]])
     """
-    p = _per_mechanism(
-        dict(
-            A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=assembly
-        ),
-        frozenset({"A0", "B0"}),
-    )
-    for k in ("crank", "coupler", "rocker"):
-        if np.any(p[k] <= 0):
-            raise KernelInputError(f"{k}: must be a positive length")
-    _check_signs(p["assembly"])
-    cos_t, sin_t = _theta(theta)
-    n = p["crank"].shape[0]
-    A, B, P = _outputs(None, (n, cos_t.shape[0], 2))
-    kernel = _kernel("planar", parallel=n > 1)
-    args = (
-        p["A0"], p["B0"], p["crank"], p["coupler"], p["rocker"], p["u"], p["v"],
-        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, A, B, P,
-    )  # fmt: skip
+    args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, None)
+    kernel = _kernel("planar", parallel=args[2].shape[0] > 1)
+    outputs = args[-3:]
 
     def run() -> Triple:
         kernel(*args)
-        return A, B, P
+        return outputs
 
     return run
 
