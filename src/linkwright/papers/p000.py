@@ -839,15 +839,6 @@ def _save_both(fig, out: Path, stem: str) -> list[Path]:
     return [save_figure(fig, out / f"{stem}.png"), save_figure(fig, out / f"{stem}.svg")]
 
 
-def _new_figure(size: tuple[float, float]):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=size, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
     """Regenerate Figs 6, 7 and 8 (PNG and SVG) and the page ``paper000.md``; return the files.
 
@@ -880,6 +871,7 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
     p000-fig6.png p000-fig6.svg p000-fig7.png p000-fig7.svg p000-fig8.png p000-fig8.svg
     paper000.md paper000-point-checks.csv paper000-eq5-checks.csv paper000-fig8-readings.csv
     """
+    from linkwright.plot import new_figure
     from linkwright.plot.sphere import plot_spherical_linkage
 
     out = Path(out)
@@ -887,7 +879,7 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
     written: list[Path] = []
     names = {6: "crank-rocker", 7: "drag link"}
     for number in (6, 7):
-        fig = _new_figure((12, 6.6))
+        fig = new_figure((12, 6.6))
         for k, assembly in enumerate((1.0, -1.0)):
             note = " (eq. 5 as printed)" if assembly > 0 else " (eq. 5's other sign)"
             plot_spherical_linkage(
@@ -898,7 +890,7 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
             )
         written += _save_both(fig, out, f"p000-fig{number}")
     modes = fig8_modes()
-    fig = _new_figure((12, 13))
+    fig = new_figure((12, 13))
     for k, mode in enumerate(modes):
         eps = 1.0 if mode.epsilon > 0 else -1.0
         m = figure_sixbar(eps, mode.assembly, 1.0)

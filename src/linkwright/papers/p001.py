@@ -651,48 +651,18 @@ _LINKS = (("A", "B"), ("B", "C"), ("C", "D"), ("C", "E"), ("B", "E"), ("E", "F")
 _GROUND = (("A", "D"), ("D", "G"))
 
 
-def _great_arc(a: Array, b: Array, samples: int = 40) -> Array:
-    """Points along the shorter great-circle arc from unit vector ``a`` to ``b``."""
-    omega = float(sphere.arc(a, b))
-    t = np.linspace(0.0, 1.0, samples)[:, None]
-    if omega < 1e-12:
-        return np.repeat(a[None], samples, axis=0)
-    return (np.sin((1 - t) * omega) * a + np.sin(t * omega) * b) / np.sin(omega)
+def _draw_configuration(ax: Any, view: Any, pos: dict[str, Array], title: str) -> None:
+    from matplotlib.patches import Circle
 
+    from linkwright.plot.sphere import great_arc, stroke
 
-class _View:
-    """Orthographic projection seen from outside the sphere along −``toward``, ``up`` upwards."""
-
-    def __init__(self, toward: Array, up: Array) -> None:
-        self.out = sphere.unit(toward)
-        self.up = sphere.unit(up - sphere.dot(up, self.out) * self.out)
-        self.right = sphere.cross(self.up, self.out)
-
-    def xy(self, p: Array) -> tuple[Array, Array]:
-        return sphere.dot(p, self.right), sphere.dot(p, self.up)
-
-    def front(self, p: Array) -> Array:
-        return sphere.dot(p, self.out) >= 0
-
-
-def _stroke(ax: Any, view: _View, pts: Array, **style: Any) -> None:
-    """A curve on the sphere: solid where it faces the viewer, dotted and faint behind."""
-    x, y = view.xy(pts)
-    front = view.front(pts)
-    ax.plot(np.where(front, x, np.nan), np.where(front, y, np.nan), **style)
-    back = {**style, "ls": ":", "alpha": 0.45}
-    ax.plot(np.where(~front, x, np.nan), np.where(~front, y, np.nan), **back)
-
-
-def _draw_configuration(ax: Any, view: _View, pos: dict[str, Array], title: str) -> None:
-    ax.add_patch(_circle_patch())
+    ax.add_patch(Circle((0.0, 0.0), 1.0, fill=False, color="0.6", lw=0.8))
     for a, b in _GROUND:
-        _stroke(ax, view, _great_arc(pos[a], pos[b]), color="0.45", lw=1.0, ls="--")
-    body = np.concatenate([_great_arc(pos[a], pos[b]) for a, b in ("BC", "CE", "EB")])
-    bx, by = view.xy(body)
-    ax.fill(bx, by, color="#f0b27a", alpha=0.45, lw=0)
+        stroke(ax, view, great_arc(pos[a], pos[b]), color="0.45", lw=1.0, ls="--")
+    body = np.concatenate([great_arc(pos[a], pos[b]) for a, b in ("BC", "CE", "EB")])
+    ax.fill(*view.xy(body).T, color="#f0b27a", alpha=0.45, lw=0)
     for a, b in _LINKS:
-        _stroke(ax, view, _great_arc(pos[a], pos[b]), color="#1f4e79", lw=1.6)
+        stroke(ax, view, great_arc(pos[a], pos[b]), color="#1f4e79", lw=1.6)
     for name, p in pos.items():
         x, y = view.xy(p)
         ground = name in "ADG"
@@ -703,7 +673,7 @@ def _draw_configuration(ax: Any, view: _View, pos: dict[str, Array], title: str)
             ms=5,
             mfc="k" if ground else "w",
             mec="k",
-            alpha=1.0 if view.front(p) else 0.5,
+            alpha=1.0 if view.depth(p) >= 0 else 0.5,
         )
         ax.annotate(name, (x, y), xytext=(3, 3), textcoords="offset points", fontsize=7)
     ax.set_title(title, fontsize=7.5)
@@ -713,23 +683,10 @@ def _draw_configuration(ax: Any, view: _View, pos: dict[str, Array], title: str)
     ax.set_axis_off()
 
 
-def _circle_patch() -> Any:
-    from matplotlib.patches import Circle
-
-    return Circle((0.0, 0.0), 1.0, fill=False, color="0.6", lw=0.8)
-
-
-def _new_figure(size: tuple[float, float]) -> Any:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=size, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def _counts_figure(sweep: dict[str, Array]) -> Any:
-    fig = _new_figure((8.0, 5.6))
+    from linkwright.plot import new_figure
+
+    fig = new_figure((8.0, 5.6))
     top, bottom = fig.subplots(2, 1, sharex=True)
     theta = np.append(sweep["input"], 360.0)
 
@@ -764,14 +721,18 @@ def _counts_figure(sweep: dict[str, Array]) -> Any:
 
 
 def _configurations_figure(theta6: float) -> Any:
+    from linkwright.plot import new_figure
+    from linkwright.plot.sphere import SphereView
+
     m = example("FG")
     every = solve_all_spherical(m, np.radians([theta6]))
     angles = paper_angles(m, every)
     count = int(every.count[0])
     pos = [{k: v[0, i] for k, v in every.positions.items()} for i in range(count)]
     seen = np.concatenate([np.stack(list(p.values())) for p in pos]) if pos else np.eye(3)
-    view = _View(seen.sum(axis=0), every.positions["A"][0, 0] if count else np.eye(3)[2])
-    fig = _new_figure((10.0, 5.6))
+    up = every.positions["A"][0, 0] if count else np.eye(3)[2]
+    view = SphereView(sphere.unit(seen.sum(axis=0)), up)
+    fig = new_figure((10.0, 5.6))
     axes = fig.subplots(2, 4).ravel()
     for i, ax in enumerate(axes):
         if i >= count:
@@ -787,7 +748,7 @@ def _configurations_figure(theta6: float) -> Any:
         _draw_configuration(ax, view, pos[i], title)
     fig.suptitle(
         f"The {count} configurations for input FG at θ6 = {theta6:g}° (orthographic view; "
-        "dotted: behind the sphere)\n" + _mechanism_text(),
+        "dashed and faded: behind the sphere)\n" + _mechanism_text(),
         fontsize=8.5,
     )
     return fig

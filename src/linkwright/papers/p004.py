@@ -73,10 +73,7 @@ def forward_check(count: int = 10_000, samples: int = 64, seed: int = 4) -> dict
 
 def reproduce(out_dir: str | Path) -> list[Path]:
     """Write the forward check and a picture of a general double slider with its ellipse."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    from linkwright.plot import save_figure
+    from linkwright.plot import new_figure, save_figure
     from linkwright.plot.generic import draw_pose
 
     out = Path(out_dir)
@@ -85,8 +82,7 @@ def reproduce(out_dir: str | Path) -> list[Path]:
     m = DoubleSlider(M=[1.0, 2.0], alpha=np.radians(70), beta=np.radians(20), p=2.0, q=1.0, h=0.5)
     coeffs = doubleslider_conic(m)
     axes = ellipse_axes(coeffs)
-    fig = Figure(figsize=(7, 6), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = new_figure((7, 6))
     ax = fig.add_subplot()
     curve = solve(m, np.linspace(0, 2 * np.pi, 361), order=0)
     ax.plot(*curve.positions["P"].T, color="#c0392b", lw=1.4, label="path of P (simulated)")

@@ -4,6 +4,12 @@ Figures are built on :class:`matplotlib.figure.Figure` with an Agg canvas, never
 so plotting works headless and from several threads.
 """
 
-from linkwright.plot.planar import draw_linkage, plot_curves, plot_diagrams, save_figure
+from linkwright.plot.planar import (
+    draw_linkage,
+    new_figure,
+    plot_curves,
+    plot_diagrams,
+    save_figure,
+)
 
-__all__ = ["draw_linkage", "plot_curves", "plot_diagrams", "save_figure"]
+__all__ = ["draw_linkage", "new_figure", "plot_curves", "plot_diagrams", "save_figure"]

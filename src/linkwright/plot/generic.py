@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from linkwright.analysis.general import point_speed
 from linkwright.engine import Crank, DyadRRP, DyadRRR, Fixed, Motion, Rigid, Trammel
 from linkwright.mechanisms import Mechanism, circuit
+from linkwright.plot.planar import new_figure
 
 __all__ = ["draw_pose", "plot_linkage", "plot_speed"]
 
@@ -88,12 +88,6 @@ def draw_pose(
             ax.annotate(step.name, p, xytext=(4, 4), textcoords="offset points", fontsize=8)
 
 
-def _figure(size: tuple[float, float]) -> Figure:
-    fig = Figure(figsize=size, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def plot_linkage(
     mechanism: Mechanism, *, samples: int = 720, title: str | None = None, ax: Axes | None = None
 ) -> Figure:
@@ -102,7 +96,7 @@ def plot_linkage(
     Limit positions (where a dyad changes branch) are marked with a cross.
     """
     motion = circuit(mechanism, samples, order=0)
-    fig = ax.figure if ax is not None else _figure((7, 6))
+    fig = ax.figure if ax is not None else new_figure((7, 6))
     ax = ax or fig.add_subplot()
     if not np.any(motion.valid):
         ax.text(
@@ -138,7 +132,7 @@ def plot_speed(
     """|dP/dθ| of a traced joint over the circuit, against the input (paper 002's velocity)."""
     joint = joint or mechanism.plan.traced[0]
     motion = circuit(mechanism, samples, order=1)
-    fig = ax.figure if ax is not None else _figure((7, 3))
+    fig = ax.figure if ax is not None else new_figure((7, 3))
     ax = ax or fig.add_subplot()
     speed = point_speed(motion, joint)
     # Near a limit position the speed per radian of input grows without bound: clip the axis

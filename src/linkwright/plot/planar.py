@@ -52,7 +52,7 @@ GROUND_COLOR = "0.35"
 # --------------------------------------------------------------------------------------------
 
 
-def _new_figure(figsize: tuple[float, float]) -> Figure:
+def new_figure(figsize: tuple[float, float]) -> Figure:
     """A figure with its own Agg canvas: no pyplot, no global backend switch."""
     fig = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(fig)
@@ -682,7 +682,7 @@ def plot_curves(
     ['assembly +1', 'assembly −1']
     """
     _require_single(mechanism)
-    fig = _new_figure((8.5, 7.0))
+    fig = new_figure((8.5, 7.0))
     ax = fig.add_subplot()
     sign = float(np.sign(mechanism.assembly))
     mine = _circuits(mechanism, samples)
@@ -855,7 +855,7 @@ def plot_diagrams(mechanism: Mechanism, *, samples: int = 720, title: str | None
         circuits); each line is a leg of the closed circuit, its ends at limit positions.
     """
     _require_single(mechanism)
-    fig = _new_figure((8.0, 9.0))
+    fig = new_figure((8.0, 9.0))
     axes = fig.subplots(3, 1, sharex=True)
     circuits = _circuits(mechanism, samples)
     slider = isinstance(mechanism, SliderCrank)

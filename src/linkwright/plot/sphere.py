@@ -25,7 +25,6 @@ import math
 
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
 from numpy.typing import ArrayLike, NDArray
@@ -40,13 +39,16 @@ from linkwright.engine import (
 )
 from linkwright.geometry import sphere
 from linkwright.mechanisms import Mechanism, circuit, input_range, solve
+from linkwright.plot.planar import new_figure
 
 __all__ = [
     "SpherePlotError",
+    "SphereView",
     "default_view",
     "great_arc",
     "plot_spherical_curves",
     "plot_spherical_linkage",
+    "stroke",
 ]
 
 Array = NDArray[np.float64]
@@ -153,9 +155,12 @@ def _directions(v: ArrayLike, name: str) -> Array:
     return arr / length[..., None]
 
 
-class _View:
+class SphereView:
     """An orthographic camera: ``eye`` (unit, towards the viewer), ``right`` and ``up`` on the
-    page. A point p projects to (p·right, p·up); it is on the near side when p·eye ≥ 0."""
+    page. A point p projects to (p·right, p·up); it is on the near side when p·eye ≥ 0.
+
+    With :func:`stroke` and :func:`great_arc` it draws on the sphere things that are not a
+    plan-built linkage (paper 001's triad configurations)."""
 
     def __init__(self, eye: Array, up_hint: Array | None = None) -> None:
         self.eye = eye
@@ -195,14 +200,14 @@ class _View:
         return np.where(near[:, None], xy, np.nan), np.where(far[:, None], xy, np.nan)
 
 
-def _view(view: ArrayLike | None, up: ArrayLike | None, fallback: Array) -> _View:
+def _view(view: ArrayLike | None, up: ArrayLike | None, fallback: Array) -> SphereView:
     eye = fallback if view is None else _directions(view, "view")
     if eye.shape != (3,):
         raise SpherePlotError(f"view: must be one 3-vector, got shape {eye.shape}")
     hint = None if up is None else _directions(up, "up")
     if hint is not None and hint.shape != (3,):
         raise SpherePlotError(f"up: must be one 3-vector, got shape {hint.shape}")
-    return _View(eye, hint)
+    return SphereView(eye, hint)
 
 
 # --------------------------------------------------------------------------------------------
@@ -210,13 +215,7 @@ def _view(view: ArrayLike | None, up: ArrayLike | None, fallback: Array) -> _Vie
 # --------------------------------------------------------------------------------------------
 
 
-def _figure(size: tuple[float, float]) -> Figure:
-    fig = Figure(figsize=size, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _backdrop(ax: Axes, view: _View, avoid: Array | None = None) -> None:
+def _backdrop(ax: Axes, view: SphereView, avoid: Array | None = None) -> None:
     """Outline, a faint near-side graticule about +Z, the equator a little stronger, and the
     axis tips +X, +Y, +Z where they face the viewer."""
     ax.add_patch(Circle((0, 0), 1.0, facecolor="#f7f9fb", edgecolor="0.25", lw=1.0, zorder=0))
@@ -252,10 +251,12 @@ def _backdrop(ax: Axes, view: _View, avoid: Array | None = None) -> None:
     ax.set_axis_off()
 
 
-def _stroke(ax: Axes, view: _View, p: Array, *, color, lw: float, label=None, z=2.0) -> None:
-    """A polyline on the sphere: solid where near, dashed and faded where far."""
+def stroke(
+    ax: Axes, view: SphereView, p: Array, *, color, lw: float, label=None, z=2.0, ls="-"
+) -> None:
+    """A polyline on the sphere: drawn ``ls`` where near, dashed and faded where far."""
     near, far = view.split(p)
-    ax.plot(*near.T, color=color, lw=lw, label=label, zorder=z, solid_capstyle="round")
+    ax.plot(*near.T, color=color, lw=lw, ls=ls, label=label, zorder=z, solid_capstyle="round")
     ax.plot(*far.T, color=color, lw=lw * 0.8, ls=(0, (3, 2)), alpha=BACK_ALPHA, zorder=z - 1)
 
 
@@ -356,12 +357,12 @@ def plot_spherical_curves(
     checked = [(str(label), _check_curve(str(label), pts)) for label, pts in curves]
     everything = np.concatenate([p for _, p in checked]) if checked else np.zeros((0, 3))
     cam = _view(view, up, _mean_direction(everything, np.array([1.0, 0.0, 0.0])))
-    fig = ax.figure if ax is not None else _figure((6, 6))
+    fig = ax.figure if ax is not None else new_figure((6, 6))
     ax = ax or fig.add_subplot()
     if backdrop:
         _backdrop(ax, cam)
     for i, (label, p) in enumerate(checked):
-        _stroke(ax, cam, p, color=CURVES[i % len(CURVES)], lw=1.4, label=label)
+        stroke(ax, cam, p, color=CURVES[i % len(CURVES)], lw=1.4, label=label)
     if checked:
         ax.legend(loc="lower right", fontsize=8)
     if title:
@@ -645,7 +646,7 @@ def plot_spherical_linkage(
         # The frame's great circle drawn level: the frame reads like a drawing board.
         up = _upright(_fit_normal(pivots, _mean_direction(pivots, eye / sphere.norm(eye))))
     cam = _view(view, up, eye)
-    fig = ax.figure if ax is not None else _figure((6.4, 6.6))
+    fig = ax.figure if ax is not None else new_figure((6.4, 6.6))
     ax = ax or fig.add_subplot()
     marked = [pivots]
     if circuits:
@@ -674,7 +675,7 @@ def plot_spherical_linkage(
             p = motion.positions[joint]
             closed = np.concatenate((p, p[:1]))
             label = f"path of {joint}" + (f" (circuit {k + 1})" if k else "")
-            _stroke(ax, cam, closed, color=CURVES[i % len(CURVES)], lw=1.4, label=label, z=3.0)
+            stroke(ax, cam, closed, color=CURVES[i % len(CURVES)], lw=1.4, label=label, z=3.0)
         limits = np.zeros(motion.shape, dtype=bool)
         for b in motion.branches.values():
             limits |= b != np.roll(b, 1, -1)
@@ -709,22 +710,22 @@ def plot_spherical_linkage(
     return fig
 
 
-def _seen_from(ax: Axes, cam: _View) -> None:
+def _seen_from(ax: Axes, cam: SphereView) -> None:
     eye = ", ".join(f"{c:.2f}" for c in np.round(cam.eye, 2) + 0.0).replace("-", MINUS)
     ax.text(0.0, 0.0, f"seen from ({eye})", transform=ax.transAxes, fontsize=7, color="0.45")
 
 
-def _frame(ax: Axes, cam: _View, ground: dict[str, Array]) -> None:
+def _frame(ax: Axes, cam: SphereView, ground: dict[str, Array]) -> None:
     """The fixed link: grey arcs joining the ground pivots in the plan's order (they all lie on
     the one frame body, so any chain through them shows it)."""
     pts = list(ground.values())
     for a, b in itertools.pairwise(pts):
         e = _safe_arc(a, b)
         if e is not None:
-            _stroke(ax, cam, e, color=GROUND, lw=3.5, z=1.8)
+            stroke(ax, cam, e, color=GROUND, lw=3.5, z=1.8)
 
 
-def _draw_pose(ax: Axes, cam: _View, mechanism: Mechanism, pose: dict[str, Array]) -> None:
+def _draw_pose(ax: Axes, cam: SphereView, mechanism: Mechanism, pose: dict[str, Array]) -> None:
     pairs, bodies = _links(mechanism)
     for o, t, p in bodies:
         edges = [_safe_arc(pose[x], pose[y]) for x, y in ((o, t), (t, p), (p, o))]
@@ -744,16 +745,16 @@ def _draw_pose(ax: Axes, cam: _View, mechanism: Mechanism, pose: dict[str, Array
             )
         )
         for e in edges:
-            _stroke(ax, cam, e, color=LINK, lw=1.2, z=4.0)
+            stroke(ax, cam, e, color=LINK, lw=1.2, z=4.0)
     for a, b in pairs:
         e = _safe_arc(pose[a], pose[b])
         if e is not None:
-            _stroke(ax, cam, e, color=LINK, lw=2.4, z=4.0)
+            stroke(ax, cam, e, color=LINK, lw=2.4, z=4.0)
     for step in mechanism.plan.steps:
         _joint(ax, cam, step.name, pose[step.name], ground=isinstance(step, Fixed))
 
 
-def _joint(ax: Axes, cam: _View, name: str, p: Array, *, ground: bool) -> None:
+def _joint(ax: Axes, cam: SphereView, name: str, p: Array, *, ground: bool) -> None:
     if not np.all(np.isfinite(p)):
         return
     near = float(cam.depth(p)) >= 0
