@@ -63,8 +63,11 @@ class Mechanism:
                     f"{f.name}: a spherical link's arc must lie strictly between 0° and 180°, "
                     f"got {np.degrees(bad).ravel()[:3].round(9).tolist()}°"
                 )
-            if f.name == "assembly" and not np.all(np.abs(value) == 1):
-                raise InvalidMechanism(f"assembly: must be 1 or -1, got {_show(value)}")
+            # assembly, assembly2: the branch signs of a family's dyads.
+            if f.name.startswith("assembly") and not np.all(np.abs(value) == 1):
+                bad = value[np.abs(value) != 1]
+                shown = repr(float(value)) if value.ndim == 0 else bad.ravel()[:3].tolist()
+                raise InvalidMechanism(f"{f.name}: must be 1 or -1, got {shown}")
             object.__setattr__(self, f.name, value)
         try:
             self.batch_shape  # noqa: B018 - broadcasting check

@@ -120,12 +120,6 @@ def _frame_error(motion: Motion, step: Rigid, params: dict[str, Array]) -> Array
     return plane.frame_error(o, t, p, u, v)
 
 
-def _sign_error(name: str, value: Array) -> InvalidMechanism | None:
-    if np.all(np.abs(value) == 1):
-        return None
-    return InvalidMechanism(f"{name}: must be 1 or -1, got {value.ravel()[:3].tolist()}")
-
-
 @dataclass(frozen=True)
 class SixBar(Mechanism):
     """What the dyad-decomposable six-bars share: scale, residuals and the input link.
@@ -147,9 +141,6 @@ class SixBar(Mechanism):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        problem = _sign_error("assembly2", np.asarray(self.assembly2))
-        if problem is not None:
-            raise problem
         self._check_attachments()
 
     def _check_attachments(self) -> None:

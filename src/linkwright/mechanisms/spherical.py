@@ -203,13 +203,6 @@ class SphericalSixBar(Mechanism):
         traced=("D", "C"),
     )
 
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        for name in ("assembly2",):
-            value = np.asarray(getattr(self, name))
-            if not np.all(np.abs(value) == 1):
-                raise InvalidMechanism(f"{name}: must be 1 or -1, got {value.ravel()[:3]}")
-
     def params(self) -> dict[str, Array]:
         out = super().params()
         b0 = _on_equator(self.frame)
@@ -319,9 +312,6 @@ class SphericalStephenson3(Mechanism):
         object.__setattr__(self, "input", 0.0)
         try:
             super().__post_init__()
-            value = np.asarray(self.assembly2)
-            if not np.all(np.abs(value) == 1):
-                raise InvalidMechanism(f"assembly2: must be 1 or -1, got {value.ravel()[:3]}")
             if np.any(np.asarray(self.a1) + np.asarray(self.a9) >= 2 * np.pi):
                 raise InvalidMechanism("a1 + a9: G would wrap past A (a1 + a9 ≥ 360°)")
         finally:
