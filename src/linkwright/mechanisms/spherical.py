@@ -120,10 +120,6 @@ class SphericalFourBar(Mechanism):
         out.update(A0=_X, B0=_on_equator(self.frame), ref=_Y)
         return out
 
-    @property
-    def scale(self) -> Array:
-        return np.float64(1.0)
-
     def output_angle(self, motion: Motion) -> Array:
         """φ3: the angle of B about +OB0 from the frame circle beyond B0 (paper 000's θ4)."""
         b0 = motion.positions["B0"]
@@ -214,10 +210,6 @@ class SphericalSixBar(Mechanism):
             ref=_Y,
         )
         return out
-
-    @property
-    def scale(self) -> Array:
-        return np.float64(1.0)
 
     def residuals(self, motion: Motion) -> dict[str, Array]:
         """Each constraint's error (radians of arc, or chord for rigid points) at every sample."""
@@ -345,10 +337,6 @@ class SphericalStephenson3(Mechanism):
     def driven(self) -> tuple[str, str]:
         """(pivot, joint) of the driven link."""
         return ("A", "B") if self.input == "AB" else ("G", "F")
-
-    @property
-    def scale(self) -> Array:
-        return np.float64(1.0)
 
     def residuals(self, motion: Motion) -> dict[str, Array]:
         """Each constraint's error at every sample (radians of arc, or chord for E)."""
