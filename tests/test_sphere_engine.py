@@ -161,6 +161,11 @@ def stencil_ok(mech, motion, floor=0.02):
     keep = m.valid.all(axis=-1) & motion.regular
     for margin in m.margins.values():
         keep &= np.all(margin > floor, axis=-1)
+    # A dyad whose pivots nearly coincide places its joint only to eps / sin d, and differences
+    # over a step shrunk for its fast motion turn that into noise far above 1e-6.
+    for step in mech.plan.dyads:
+        d = sphere.arc(m.positions[step.p1], m.positions[step.p2])
+        keep &= np.all(np.sin(d) > 0.05, axis=-1)
     return keep, h
 
 
