@@ -12,7 +12,8 @@ Run as ``python bench/run.py`` (``make bench``, which also installs the peers). 
 Every contestant's positions are checked against linkwright's plan before anything is timed.
 Rates count joint positions (3 moving joints per mechanism-sample). The bound is memory
 bandwidth: writing A, B, P costs 48 bytes per planar mechanism-sample (72 on the sphere); the
-copy bandwidth is measured in the same run and each rate is given as a fraction of it.
+copy and store (fill) bandwidths are measured in the same run and each rate is given as a
+fraction of both.
 """
 
 from __future__ import annotations
@@ -89,13 +90,15 @@ def median_of(fn: Callable[[], object], runs: int) -> float:
     return statistics.median(times)
 
 
-def copy_bandwidth(megabytes: int = 400, repeats: int = 5) -> float:
-    """Bytes per second written by a large ``np.copyto`` (read + write counted as one write,
-    the way the rates below count only what they store)."""
+def bandwidths(megabytes: int = 400, repeats: int = 5) -> tuple[float, float]:
+    """Bytes per second stored by a large ``np.copyto`` (read + write counted as one write, the
+    way the rates below count only what they store) and by a large ``fill`` (stores alone, as a
+    kernel that only writes its results: the stricter bound)."""
     src = np.ones(megabytes * 2**20 // 8)
     dst = np.empty_like(src)
-    t = best_of(lambda: np.copyto(dst, src), repeats)
-    return src.nbytes / t
+    copy = src.nbytes / best_of(lambda: np.copyto(dst, src), repeats)
+    fill = dst.nbytes / best_of(lambda: dst.fill(2.0), repeats)
+    return copy, fill
 
 
 def check(name: str, got, reference: dict[str, np.ndarray], tol: float) -> None:
@@ -136,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     kernels = optional_kernels()
     peers = optional_peers()
     theta = np.linspace(-np.pi, np.pi, s, endpoint=False)
-    bandwidth = copy_bandwidth()
+    bandwidth, store_bandwidth = bandwidths()
 
     # (a) planar batch
     m = crank_rockers(n)
@@ -185,8 +188,10 @@ def main(argv: list[str] | None = None) -> int:
     if kernels is not None:
         out1 = tuple(np.empty((1, s, 2)) for _ in MOVING_JOINTS)
         curve = kernels.prepared_fourbar(*one_args, theta)
+        curve_motion = kernels.prepared_fourbar(*one_args, theta, order=2)
         cases_b[:0] = [
             ("linkwright kernel, prepared call", curve),
+            ("linkwright kernel, prepared + derivatives", curve_motion),
             (
                 "linkwright kernel, checked call",
                 lambda: kernels.fourbar_positions(*one_args, theta, out=out1),
@@ -250,30 +255,57 @@ def main(argv: list[str] | None = None) -> int:
         print("peers: " + ", ".join(f"{k} {v}" for k, v in peers.peer_versions().items()))
     else:
         print("peers: pylinkage not installed (make bench installs it)")
-    print(f"copy bandwidth: {bandwidth / 1e9:.1f} GB/s")
+    print(
+        f"bandwidth: copy {bandwidth / 1e9:.1f} GB/s, store (fill) {store_bandwidth / 1e9:.1f} GB/s"
+        " (one thread)"
+    )
     samples = n * s
-    for title, rows, width in (
-        (f"(a) {n:,} planar crank-rockers x {s} inputs", times_a, 48),
-        (f"(c) {n:,} spherical crank-rockers x {s} inputs", times_c, 72),
+    targets = {"a": 1e9, "c": 2e8}
+    for case, title, rows, width in (
+        ("a", f"(a) {n:,} planar crank-rockers x {s} inputs", times_a, 48),
+        ("c", f"(c) {n:,} spherical crank-rockers x {s} inputs", times_c, 72),
     ):
         base = dict(rows)["numpy closed form (baseline)"]
+        peer = dict(rows).get("pylinkage Ensemble.simulate")
         bound = len(MOVING_JOINTS) * bandwidth / width
+        store_bound = len(MOVING_JOINTS) * store_bandwidth / width
         print()
-        print(f"{title}; bandwidth bound {bound:.2e} joint positions/s ({width} B per sample)")
-        head = f"{'':<42} {'time [s]':>9} {'joint pos/s':>12} {'of bound':>9} {'vs numpy':>9}"
+        print(
+            f"{title}; bounds: copy {bound:.2e}, store {store_bound:.2e} joint positions/s "
+            f"({width} B per sample)"
+        )
+        head = (
+            f"{'':<42} {'time [s]':>9} {'joint pos/s':>12} {'of copy':>8} {'of store':>8} "
+            f"{'vs numpy':>9}" + (f" {'vs pylinkage':>12}" if peer else "")
+        )
         print(head)
         print("-" * len(head))
         for name, t in rows:
             rate = len(MOVING_JOINTS) * samples / t
-            print(f"{name:<42} {t:>9.4f} {rate:>12.3e} {rate / bound:>8.1%} {base / t:>8.2f}x")
+            line = (
+                f"{name:<42} {t:>9.4f} {rate:>12.3e} {rate / bound:>7.1%} "
+                f"{rate / store_bound:>8.1%} {base / t:>8.2f}x"
+            )
+            print(line + (f" {peer / t:>11.1f}x" if peer else ""))
+        best = min(t for name, t in rows if name.startswith("linkwright"))
+        rate = len(MOVING_JOINTS) * samples / best
+        verdict = "met" if rate >= targets[case] else f"not met ({rate / targets[case]:.0%} of it)"
+        print(f"target {targets[case]:.0e} joint positions/s: {verdict}")
     print()
     print(f"(b) one planar four-bar x {s} inputs")
     base = dict(times_b)["numpy closed form (baseline)"]
-    head = f"{'':<42} {'time [us]':>10} {'vs numpy':>9}"
+    peer = dict(times_b).get("pylinkage step_fast")
+    head = f"{'':<42} {'time [us]':>10} {'vs numpy':>9}" + (
+        f" {'vs pylinkage':>12}" if peer else ""
+    )
     print(head)
     print("-" * len(head))
     for name, t in times_b:
-        print(f"{name:<42} {t * 1e6:>10.1f} {base / t:>8.2f}x")
+        line = f"{name:<42} {t * 1e6:>10.1f} {base / t:>8.2f}x"
+        print(line + (f" {peer / t:>11.1f}x" if peer else ""))
+    fastest = min(t for name, t in times_b if name.startswith("linkwright"))
+    verdict = "met" if fastest < 10e-6 else f"not met ({fastest * 1e6:.1f} us)"
+    print(f"target: a 360-sample curve under 10 us: {verdict}")
     print()
     print("(d) atlas descriptors, (e) path synthesis, (f) atlas query: not built yet (issues 6, 7)")
     print(f"total {time.perf_counter() - start:.1f} s")

@@ -226,3 +226,77 @@ def test_prepared_fourbar_repeats_the_batched_kernel():
         for w, f, g in zip(want, first, again, strict=True):
             np.testing.assert_array_equal(w, f)
             np.testing.assert_array_equal(w, g)
+
+
+def _motion_of(mech: FourBar, theta: np.ndarray):
+    p = mech.params()
+    return kernels.fourbar_motion(
+        *(p[k] for k in ("A0", "B0", "crank", "coupler", "rocker", "u", "v", "assembly")), theta
+    )
+
+
+def test_motion_kernel_matches_plan_derivatives():
+    """Velocities and accelerations against the plan's steps, with the same NaN masks (not
+    assembled, and singular at the limit positions)."""
+    rng = np.random.default_rng(11)
+    mech = _random_fourbars(rng, 300)
+    theta = rng.uniform(-np.pi, 3 * np.pi, 121)
+    ref = solve(mech, theta, order=2)
+    (pos, vel, acc) = _motion_of(mech, theta)
+    scale = np.asarray(mech.scale)[:, None]
+    # Derivatives blow up like 1/√margin near a limit position, and their rounding with them.
+    margin = np.clip(np.nan_to_num(ref.margins["B"]), 1e-16, None)
+    for got, want, tol in (
+        (pos, ref.positions, 1e-12),
+        (vel, ref.velocities, 1e-10),
+        (acc, ref.accelerations, 1e-10),
+    ):
+        for joint, g in zip(("A", "B", "P"), got, strict=True):
+            w = want[joint]
+            np.testing.assert_array_equal(np.isnan(g), np.isnan(w))
+            err = np.nan_to_num(np.abs(g - w)).max(axis=-1) / scale
+            allowed = tol / margin**1.5
+            assert np.all(err <= allowed), (joint, (err / allowed).max())
+    assert 0.2 < ref.valid.mean() < 0.9
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    lengths=st.lists(st.floats(0.3, 3.0), min_size=3, max_size=3),
+    pivots=st.lists(st.floats(-2, 2), min_size=4, max_size=4),
+    point=st.tuples(st.floats(-2, 2), st.floats(-2, 2)),
+    sign=st.sampled_from([-1.0, 1.0]),
+    t=st.floats(-np.pi, np.pi),
+)
+def test_motion_kernel_is_the_derivative_of_the_positions(lengths, pivots, point, sign, t):
+    """Independent of the plan: 8th-order central differences of the kernel's own positions."""
+    mech = FourBar(pivots[:2], pivots[2:], *lengths, u=point[0], v=point[1], assembly=sign)
+    h = 1e-3
+    offsets = np.arange(-4, 5) * h
+    (pos, vel, acc) = _motion_of(mech, t + offsets)
+    P = pos[2][0]
+    if np.isnan(P).any() or np.isnan(vel[2][0, 4]).any():
+        return
+    # Far enough from a limit position for the differences to mean something.
+    ref = solve(mech, [t], order=0)
+    if ref.margins["B"][0] < 1e-2:
+        return
+    c1 = np.array([1 / 280, -4 / 105, 1 / 5, -4 / 5, 0, 4 / 5, -1 / 5, 4 / 105, -1 / 280])
+    c2 = np.array([-1 / 560, 8 / 315, -1 / 5, 8 / 5, -205 / 72, 8 / 5, -1 / 5, 8 / 315, -1 / 560])
+    size = float(mech.scale)
+    np.testing.assert_allclose(c1 @ P / h, vel[2][0, 4], atol=1e-6 * size / ref.margins["B"][0])
+    np.testing.assert_allclose(
+        c2 @ P / h**2, acc[2][0, 4], atol=1e-4 * size / ref.margins["B"][0] ** 2
+    )
+
+
+def test_prepared_motion_and_bad_order():
+    args = ([0, 0], [4, 0], 1, 5, 3.5, 2.5, 1.0, 1)
+    theta = np.linspace(0, 2 * np.pi, 17)
+    run = kernels.prepared_fourbar(*args, theta, order=2)
+    want = kernels.fourbar_motion(*args, theta)
+    for w, g in zip(want, run(), strict=True):
+        for a, b in zip(w, g, strict=True):
+            np.testing.assert_array_equal(a, b)
+    with pytest.raises(KernelInputError, match="order"):
+        kernels.prepared_fourbar(*args, theta, order=1)

@@ -30,11 +30,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine.plan import ASSEMBLY_TOL
+from linkwright.engine.plan import ASSEMBLY_TOL, SINGULAR_MARGIN, SINGULAR_SIN
 
 __all__ = [
     "KernelInputError",
     "available",
+    "fourbar_motion",
     "fourbar_positions",
     "positions",
     "prepared_fourbar",
@@ -46,6 +47,9 @@ Triple = tuple[Array, Array, Array]
 
 prange = range  # replaced by numba.prange when the kernels are compiled
 
+# Mechanisms per parallel task: each task fills a scratch block that stays in cache.
+CHUNK = 16
+
 
 class KernelInputError(ValueError):
     """Arguments a kernel cannot take (names the argument and the problem)."""
@@ -55,43 +59,133 @@ def _planar_kernel(a0, b0, crank, coupler, rocker, u, v, assembly, cos_t, sin_t,
     n = a0.shape[0]
     samples = cos_t.shape[0]
     nan = np.nan
-    for i in prange(n):
-        ax0, ay0, bx0, by0 = a0[i, 0], a0[i, 1], b0[i, 0], b0[i, 1]
-        r0, r1, r2 = crank[i], coupler[i], rocker[i]
-        sign, ui, vi = assembly[i], u[i], v[i]
-        # The DyadRRR step's factored forms, hoisted out of the sample loop.
-        sum2 = (r1 + r2) ** 2
-        dif2 = (r1 - r2) ** 2
-        prod = (r1 - r2) * (r1 + r2)
-        for j in range(samples):
-            ax = ax0 + r0 * cos_t[j]
-            ay = ay0 + r0 * sin_t[j]
-            dx = bx0 - ax
-            dy = by0 - ay
-            d2 = dx * dx + dy * dy
-            # = h²/r1² = sin² of the angle at A; d2 = 0 (A on B0) cannot close, as in DyadRRR.
-            margin = (sum2 - d2) * (d2 - dif2) / (4.0 * d2 * r1 * r1) if d2 > 0.0 else -1.0
-            if not margin >= -tol:
-                A[i, j, 0] = A[i, j, 1] = nan
-                B[i, j, 0] = B[i, j, 1] = nan
-                P[i, j, 0] = P[i, j, 1] = nan
-                continue
-            d = math.sqrt(d2)
-            a = (prod + d2) / (2.0 * d)
-            h = sign * (r1 * math.sqrt(max(margin, 0.0)))
-            bx = ax + (a * dx - h * dy) / d
-            by = ay + (a * dy + h * dx) / d
-            ex = bx - ax
-            ey = by - ay
-            inv_len = 1.0 / math.hypot(ex, ey)
-            cu = ui * inv_len
-            cv = vi * inv_len
-            A[i, j, 0] = ax
-            A[i, j, 1] = ay
-            B[i, j, 0] = bx
-            B[i, j, 1] = by
-            P[i, j, 0] = ax + (cu * ex - cv * ey)
-            P[i, j, 1] = ay + (cu * ey + cv * ex)
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        # Components go to separate scratch rows first: the sample loop then has no interleaved
+        # stores and no branch, so LLVM vectorises it (4-8 samples per instruction); the
+        # interleaving copy that follows runs from cache.
+        rows = np.empty((6, samples))
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            ax0, ay0, bx0, by0 = a0[i, 0], a0[i, 1], b0[i, 0], b0[i, 1]
+            r0, r1, r2 = crank[i], coupler[i], rocker[i]
+            # The DyadRRR step's factored forms, hoisted out of the sample loop.
+            sum2 = (r1 + r2) ** 2
+            dif2 = (r1 - r2) ** 2
+            prod = (r1 - r2) * (r1 + r2)
+            half_sign = 0.5 * assembly[i]
+            quarter_r1 = 0.25 / (r1 * r1)
+            # P = A + (u·e + v·perp(e))/r1 with e = B − A, whose length is r1 by construction.
+            ui, vi = u[i] / r1, v[i] / r1
+            for j in range(samples):
+                ax = ax0 + r0 * cos_t[j]
+                ay = ay0 + r0 * sin_t[j]
+                dx = bx0 - ax
+                dy = by0 - ay
+                d2 = dx * dx + dy * dy
+                inv_d2 = 1.0 / d2
+                k = (sum2 - d2) * (d2 - dif2)  # = 4·d²·h², exact near either root
+                # margin = h²/r1² = sin² of the angle at A; d2 = 0 makes it NaN: not closed.
+                bad = 0.0 if k * inv_d2 * quarter_r1 >= -tol else nan
+                along = 0.5 * (prod + d2) * inv_d2  # a/d
+                across = half_sign * math.sqrt(max(k, 0.0)) * inv_d2  # ±h/d
+                ex = along * dx - across * dy
+                ey = along * dy + across * dx
+                rows[0, j] = ax + bad
+                rows[1, j] = ay + bad
+                rows[2, j] = ax + ex + bad
+                rows[3, j] = ay + ey + bad
+                rows[4, j] = ax + (ui * ex - vi * ey) + bad
+                rows[5, j] = ay + (ui * ey + vi * ex) + bad
+            for j in range(samples):
+                A[i, j, 0] = rows[0, j]
+                A[i, j, 1] = rows[1, j]
+                B[i, j, 0] = rows[2, j]
+                B[i, j, 1] = rows[3, j]
+                P[i, j, 0] = rows[4, j]
+                P[i, j, 1] = rows[5, j]
+
+
+def _planar_motion_kernel(
+    a0, b0, crank, coupler, rocker, u, v, assembly, cos_t, sin_t, tol, sing_sin, sing_margin,
+    A, B, P, VA, VB, VP, AA, AB, AP,
+):  # fmt: skip
+    n = a0.shape[0]
+    samples = cos_t.shape[0]
+    nan = np.nan
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        rows = np.empty((18, samples))
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            ax0, ay0, bx0, by0 = a0[i, 0], a0[i, 1], b0[i, 0], b0[i, 1]
+            r0, r1, r2 = crank[i], coupler[i], rocker[i]
+            sum2 = (r1 + r2) ** 2
+            dif2 = (r1 - r2) ** 2
+            prod = (r1 - r2) * (r1 + r2)
+            half_sign = 0.5 * assembly[i]
+            quarter_r1 = 0.25 / (r1 * r1)
+            inv_r1r2 = 1.0 / (r1 * r2)
+            ui, vi = u[i] / r1, v[i] / r1
+            for j in range(samples):
+                cj, sj = cos_t[j], sin_t[j]
+                ax = ax0 + r0 * cj
+                ay = ay0 + r0 * sj
+                dx = bx0 - ax
+                dy = by0 - ay
+                d2 = dx * dx + dy * dy
+                inv_d2 = 1.0 / d2
+                k = (sum2 - d2) * (d2 - dif2)
+                margin = k * inv_d2 * quarter_r1
+                bad = 0.0 if margin >= -tol else nan
+                along = 0.5 * (prod + d2) * inv_d2
+                across = half_sign * math.sqrt(max(k, 0.0)) * inv_d2
+                ex = along * dx - across * dy
+                ey = along * dy + across * dx
+                bx, by = ax + ex, ay + ey
+                # The DyadRRR step's derivatives: rows B − A and B − B0 of the differentiated
+                # constraints, solved by Cramer's rule; singular (NaN) where the step says so.
+                fx, fy = bx - bx0, by - by0
+                det = ex * fy - ey * fx
+                regular = (abs(det * inv_r1r2) > sing_sin) & (margin > sing_margin)
+                bad_d = bad if regular else nan
+                inv_det = 1.0 / det
+                vax, vay = -r0 * sj, r0 * cj
+                rhs = ex * vax + ey * vay
+                vbx = rhs * fy * inv_det
+                vby = -fx * rhs * inv_det
+                wx, wy = vbx - vax, vby - vay
+                aax, aay = -r0 * cj, -r0 * sj
+                rhs1 = ex * aax + ey * aay - (wx * wx + wy * wy)
+                rhs2 = -(vbx * vbx + vby * vby)
+                abx = (rhs1 * fy - rhs2 * ey) * inv_det
+                aby = (ex * rhs2 - fx * rhs1) * inv_det
+                gx, gy = abx - aax, aby - aay
+                rows[0, j] = ax + bad
+                rows[1, j] = ay + bad
+                rows[2, j] = bx + bad
+                rows[3, j] = by + bad
+                rows[4, j] = ax + (ui * ex - vi * ey) + bad
+                rows[5, j] = ay + (ui * ey + vi * ex) + bad
+                rows[6, j] = vax + bad_d
+                rows[7, j] = vay + bad_d
+                rows[8, j] = vbx + bad_d
+                rows[9, j] = vby + bad_d
+                rows[10, j] = vax + (ui * wx - vi * wy) + bad_d
+                rows[11, j] = vay + (ui * wy + vi * wx) + bad_d
+                rows[12, j] = aax + bad_d
+                rows[13, j] = aay + bad_d
+                rows[14, j] = abx + bad_d
+                rows[15, j] = aby + bad_d
+                rows[16, j] = aax + (ui * gx - vi * gy) + bad_d
+                rows[17, j] = aay + (ui * gy + vi * gx) + bad_d
+            for j in range(samples):
+                for k2 in range(2):
+                    A[i, j, k2] = rows[k2, j]
+                    B[i, j, k2] = rows[2 + k2, j]
+                    P[i, j, k2] = rows[4 + k2, j]
+                    VA[i, j, k2] = rows[6 + k2, j]
+                    VB[i, j, k2] = rows[8 + k2, j]
+                    VP[i, j, k2] = rows[10 + k2, j]
+                    AA[i, j, k2] = rows[12 + k2, j]
+                    AB[i, j, k2] = rows[14 + k2, j]
+                    AP[i, j, k2] = rows[16 + k2, j]
 
 
 def _spherical_kernel(
@@ -100,96 +194,86 @@ def _spherical_kernel(
     n = frame.shape[0]
     samples = cos_t.shape[0]
     nan = np.nan
-    for i in prange(n):
-        bx0, by0 = math.cos(frame[i]), math.sin(frame[i])
-        ca, sa = math.cos(crank[i]), math.sin(crank[i])
-        r1, r2 = coupler[i], rocker[i]
-        cr1, sr1, cr2 = math.cos(r1), math.sin(r1), math.cos(r2)
-        sign = assembly[i]
-        # Half-sum and half-difference of the dyad's arcs: the Gram determinant's product form
-        # 4 sin s sin(s−d) sin(s−r1) sin(s−r2) (SphereDyad, sphere.gram) expanded in sin and cos
-        # of d/2, so the sample loop needs no trigonometric call and stays exact at the roots.
-        p, q = 0.5 * (r1 + r2), 0.5 * (r1 - r2)
-        cp, sp, cq, sq = math.cos(p), math.sin(p), math.cos(q), math.sin(q)
-        sl = math.sin(point_arc[i])
-        cl = math.cos(point_arc[i])
-        sl_c = sl * math.cos(point_angle[i])
-        sl_s = sl * math.sin(point_angle[i])
-        for j in range(samples):
-            ax = ca
-            ay = sa * cos_t[j]
-            az = sa * sin_t[j]
-            # w = A × B0, B0 = (bx0, by0, 0)
-            wx = -az * by0
-            wy = az * bx0
-            wz = ax * by0 - ay * bx0
-            sin_d = math.sqrt(wx * wx + wy * wy + wz * wz)
-            cos_d = ax * bx0 + ay * by0
-            # sin and cos of d/2 from whichever half-angle formula does not cancel.
-            if cos_d >= 0.0:
-                ch = math.sqrt(0.5 * (1.0 + cos_d))
-                sh = sin_d / (2.0 * ch)
-            else:
-                sh = math.sqrt(0.5 * (1.0 - cos_d))
-                ch = sin_d / (2.0 * sh)
-            g = (
-                4.0
-                * (sp * ch + cp * sh)
-                * (sp * ch - cp * sh)
-                * (sh * cq - ch * sq)
-                * (sh * cq + ch * sq)
-            )
-            ok = sin_d > 0.0
-            if ok:
-                margin = g / (sin_d * sr1) ** 2
-                ok = margin >= -tol
-            if not ok:
+    for c in prange((n + CHUNK - 1) // CHUNK):
+        rows = np.empty((9, samples))  # as in the planar kernel: branch-free, vectorised
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            bx0, by0 = math.cos(frame[i]), math.sin(frame[i])
+            ca, sa = math.cos(crank[i]), math.sin(crank[i])
+            r1, r2 = coupler[i], rocker[i]
+            cr1, sr1, cr2 = math.cos(r1), math.sin(r1), math.cos(r2)
+            sign = assembly[i]
+            inv_sr1_2 = 1.0 / (sr1 * sr1)
+            # Half-sum and half-difference of the dyad's arcs: the Gram determinant's product
+            # form 4 sin s sin(s−d) sin(s−r1) sin(s−r2) (SphereDyad, sphere.gram) expanded in
+            # sin and cos of d/2, so the sample loop needs no trigonometric call and stays exact
+            # at the roots.
+            p, q = 0.5 * (r1 + r2), 0.5 * (r1 - r2)
+            cp, sp, cq, sq = math.cos(p), math.sin(p), math.cos(q), math.sin(q)
+            cl = math.cos(point_arc[i])
+            # P = cos(arc)·A' + … in SphereRigid's basis A, B, A × B; |A × B| = sin r1.
+            pb = math.sin(point_arc[i]) * math.cos(point_angle[i]) / sr1
+            pc = math.sin(point_arc[i]) * math.sin(point_angle[i]) / sr1
+            for j in range(samples):
+                ax = ca
+                ay = sa * cos_t[j]
+                az = sa * sin_t[j]
+                # w = A × B0, B0 = (bx0, by0, 0); |w| = sin d
+                wx = -az * by0
+                wy = az * bx0
+                wz = ax * by0 - ay * bx0
+                sin_d = math.sqrt(wx * wx + wy * wy + wz * wz)
+                cos_d = ax * bx0 + ay * by0
+                # sin and cos of d/2 from whichever half-angle formula does not cancel.
+                big = math.sqrt(0.5 * (1.0 + abs(cos_d)))
+                small = sin_d / (2.0 * big)
+                ch = big if cos_d >= 0.0 else small
+                sh = small if cos_d >= 0.0 else big
+                g = (
+                    4.0
+                    * (sp * ch + cp * sh)
+                    * (sp * ch - cp * sh)
+                    * (sh * cq - ch * sq)
+                    * (sh * cq + ch * sq)
+                )
+                inv_sd = 1.0 / sin_d
+                # margin = G/(sin d sin r1)², sin² of the angle at A; sin d = 0 cannot close.
+                margin = g * inv_sd * inv_sd * inv_sr1_2
+                bad = 0.0 if (sin_d > 0.0) & (margin >= -tol) else nan
+                # Orthonormal frame at A: t towards B0 is (A × B0) × A / sin d, n = A × t.
+                tx = (wy * az - wz * ay) * inv_sd
+                ty = (wz * ax - wx * az) * inv_sd
+                tz = (wx * ay - wy * ax) * inv_sd
+                nx = ay * tz - az * ty
+                ny = az * tx - ax * tz
+                nz = ax * ty - ay * tx
+                # (cos φ, sin φ)·sin r1 sin d = (cos r2 − cos r1 cos d, ±√G): normalise, no atan2.
+                y = sign * math.sqrt(max(g, 0.0))
+                x = cr2 - cr1 * cos_d
+                hyp = math.sqrt(x * x + y * y)
+                inv_hyp = 1.0 / hyp
+                cphi = x * inv_hyp if hyp > 0.0 else 1.0
+                sphi = y * inv_hyp if hyp > 0.0 else 0.0
+                bx = cr1 * ax + sr1 * (cphi * tx + sphi * nx)
+                by = cr1 * ay + sr1 * (cphi * ty + sphi * ny)
+                bz = cr1 * az + sr1 * (cphi * tz + sphi * nz)
+                ox = ay * bz - az * by
+                oy = az * bx - ax * bz
+                oz = ax * by - ay * bx
+                pa = cl - pb * (ax * bx + ay * by + az * bz)
+                rows[0, j] = ax + bad
+                rows[1, j] = ay + bad
+                rows[2, j] = az + bad
+                rows[3, j] = bx + bad
+                rows[4, j] = by + bad
+                rows[5, j] = bz + bad
+                rows[6, j] = pa * ax + pb * bx + pc * ox + bad
+                rows[7, j] = pa * ay + pb * by + pc * oy + bad
+                rows[8, j] = pa * az + pb * bz + pc * oz + bad
+            for j in range(samples):
                 for k in range(3):
-                    A[i, j, k] = nan
-                    B[i, j, k] = nan
-                    P[i, j, k] = nan
-                continue
-            # Orthonormal frame at A: t towards B0 from (A × B0) × A, n = A × t.
-            tx = wy * az - wz * ay
-            ty = wz * ax - wx * az
-            tz = wx * ay - wy * ax
-            tn = 1.0 / math.sqrt(tx * tx + ty * ty + tz * tz)
-            tx *= tn
-            ty *= tn
-            tz *= tn
-            nx = ay * tz - az * ty
-            ny = az * tx - ax * tz
-            nz = ax * ty - ay * tx
-            # (cos φ, sin φ)·sin r1 sin d = (cos r2 − cos r1 cos d, ±√G): normalise, no atan2.
-            y = sign * math.sqrt(max(g, 0.0))
-            x = cr2 - cr1 * cos_d
-            hyp = math.sqrt(x * x + y * y)
-            if hyp > 0.0:
-                cphi = x / hyp
-                sphi = y / hyp
-            else:
-                cphi = 1.0
-                sphi = 0.0
-            bx = cr1 * ax + sr1 * (cphi * tx + sphi * nx)
-            by = cr1 * ay + sr1 * (cphi * ty + sphi * ny)
-            bz = cr1 * az + sr1 * (cphi * tz + sphi * nz)
-            # P = a·A + b·B + c·(A × B), SphereRigid's basis.
-            ox = ay * bz - az * by
-            oy = az * bx - ax * bz
-            oz = ax * by - ay * bx
-            sin_ot = math.sqrt(ox * ox + oy * oy + oz * oz)
-            b = sl_c / sin_ot
-            c = sl_s / sin_ot
-            a = cl - b * (ax * bx + ay * by + az * bz)
-            A[i, j, 0] = ax
-            A[i, j, 1] = ay
-            A[i, j, 2] = az
-            B[i, j, 0] = bx
-            B[i, j, 1] = by
-            B[i, j, 2] = bz
-            P[i, j, 0] = a * ax + b * bx + c * ox
-            P[i, j, 1] = a * ay + b * by + c * oy
-            P[i, j, 2] = a * az + b * bz + c * oz
+                    A[i, j, k] = rows[k, j]
+                    B[i, j, k] = rows[3 + k, j]
+                    P[i, j, k] = rows[6 + k, j]
 
 
 _KERNELS: dict[str, Any] = {}
@@ -217,9 +301,14 @@ def available() -> bool:
 
 
 def _kernel(name: str, parallel: bool = True) -> Any:
+    # A batch of at most one chunk runs serially: starting threads costs more than it saves.
     key = f"{name}-{'parallel' if parallel else 'serial'}"
     if key not in _KERNELS:
-        plain = {"planar": _planar_kernel, "sphere": _spherical_kernel}[name]
+        plain = {
+            "planar": _planar_kernel,
+            "planar-motion": _planar_motion_kernel,
+            "sphere": _spherical_kernel,
+        }[name]
         numba = _numba()
         if numba is None:
             _KERNELS[key] = plain
@@ -286,8 +375,11 @@ def _outputs(out: Triple | None, shape: tuple[int, ...]) -> Triple:
     return out[0], out[1], out[2]
 
 
-def _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out) -> tuple:
-    """The planar kernel's arguments, checked and broadcast, its outputs last."""
+def _planar_args(
+    A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, order: int = 0
+) -> tuple:
+    """The planar kernel's arguments, checked and broadcast, its outputs last (three for
+    positions; nine, grouped as positions, velocities, accelerations, for ``order`` 2)."""
     p = _per_mechanism(
         dict(
             A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=assembly
@@ -299,11 +391,20 @@ def _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out) -> 
             raise KernelInputError(f"{k}: must be a positive length")
     _check_signs(p["assembly"])
     cos_t, sin_t = _theta(theta)
-    outputs = _outputs(out, (p["crank"].shape[0], cos_t.shape[0], 2))
-    return (
+    shape = (p["crank"].shape[0], cos_t.shape[0], 2)
+    head = (
         p["A0"], p["B0"], p["crank"], p["coupler"], p["rocker"], p["u"], p["v"],
-        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, *outputs,
+        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL,
     )  # fmt: skip
+    if order == 0:
+        return (*head, *_outputs(out, shape))
+    if order != 2:
+        raise KernelInputError(f"order: must be 0 (positions) or 2 (with derivatives), got {order}")
+    groups = (None, None, None) if out is None else out
+    if len(groups) != 3:
+        raise KernelInputError("out: must be three triples (positions, velocities, accelerations)")
+    outputs = [a for group in groups for a in _outputs(group, shape)]
+    return (*head, SINGULAR_SIN, SINGULAR_MARGIN, *outputs)
 
 
 def fourbar_positions(
@@ -356,8 +457,48 @@ def fourbar_positions(
     (array([[[nan, nan]]]), array([[[nan, nan]]]))
     """
     args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out)
-    _kernel("planar")(*args)
+    _kernel("planar", parallel=args[2].shape[0] > CHUNK)(*args)
     return args[-3:]
+
+
+def fourbar_motion(
+    A0: ArrayLike,
+    B0: ArrayLike,
+    crank: ArrayLike,
+    coupler: ArrayLike,
+    rocker: ArrayLike,
+    u: ArrayLike,
+    v: ArrayLike,
+    assembly: ArrayLike,
+    theta: ArrayLike,
+    out: tuple[Triple, Triple, Triple] | None = None,
+) -> tuple[Triple, Triple, Triple]:
+    """Positions, velocities and accelerations (d/dθ, d²/dθ²) of A, B, P in one compiled pass.
+
+    Arguments as :func:`fourbar_positions`. The derivatives are those of the plan's steps: the
+    differentiated loop constraints of the dyad, (B − A)·(B′ − A′) = 0 and (B − B0)·B′ = 0, and
+    their derivatives, solved by Cramer's rule. They are NaN where the plan's are: where the
+    linkage does not assemble, and at a singular position (B − A parallel to B − B0, a limit
+    position of the input), where they do not exist.
+
+    Returns
+    -------
+    (A, B, P), (A′, B′, P′), (A″, B″, P″) : each array of shape (n, samples, 2).
+
+    Examples
+    --------
+    At θ = 0 the crank-rocker of :func:`fourbar_positions` has A′ = (0, 1), and B′ is the
+    solution of (3.625, 3.443744)·B′ = 3.443744 (the coupler's row) and (0.625, 3.443744)·B′ = 0
+    (the rocker's): their difference gives 3·B′x = 3.443744, and B′y = −0.625·B′x/3.443744 =
+    −0.625/3.
+
+    >>> (A, B, P), (dA, dB, dP), _ = fourbar_motion([0, 0], [4, 0], 1, 5, 3.5, 2.5, 1.0, 1, [0.0])
+    >>> dA[0, 0], dB[0, 0].round(6)
+    (array([0., 1.]), array([ 1.147915, -0.208333]))
+    """
+    args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, order=2)
+    _kernel("planar-motion", parallel=args[2].shape[0] > CHUNK)(*args)
+    return args[-9:-6], args[-6:-3], args[-3:]
 
 
 def prepared_fourbar(
@@ -370,8 +511,10 @@ def prepared_fourbar(
     v: ArrayLike,
     assembly: ArrayLike,
     theta: ArrayLike,
-) -> Callable[[], Triple]:
-    """A zero-argument call that recomputes :func:`fourbar_positions` for fixed arguments.
+    order: int = 0,
+) -> Callable[[], Any]:
+    """A zero-argument call that recomputes :func:`fourbar_positions` (``order`` 0) or
+    :func:`fourbar_motion` (``order`` 2) for fixed arguments.
 
     Everything that does not change between calls (checks, broadcasting, the sines and cosines
     of θ, the output arrays) is done once here; each call is then one compiled pass, without
@@ -386,14 +529,17 @@ def prepared_fourbar(
     >>> B[0].round(6)
     array([[4.625   , 3.443744],
            [2.775   , 3.278624]])
+    >>> motion = prepared_fourbar([0, 0], [4, 0], 1, 5, 3.5, 2.5, 1.0, 1, [0.0], order=2)
+    >>> motion()[1][1][0, 0].round(6)
+    array([ 1.147915, -0.208333])
     """
-    args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, None)
-    kernel = _kernel("planar", parallel=args[2].shape[0] > 1)
-    outputs = args[-3:]
+    args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, None, order)
+    kernel = _kernel("planar" if order == 0 else "planar-motion", parallel=args[2].shape[0] > CHUNK)
+    result = args[-3:] if order == 0 else (args[-9:-6], args[-6:-3], args[-3:])
 
-    def run() -> Triple:
+    def run() -> Any:
         kernel(*args)
-        return outputs
+        return result
 
     return run
 
@@ -462,7 +608,7 @@ def spherical_fourbar_positions(
     cos_t, sin_t = _theta(theta)
     n = p["frame"].shape[0]
     A, B, P = _outputs(out, (n, cos_t.shape[0], 3))
-    _kernel("sphere")(
+    _kernel("sphere", parallel=n > CHUNK)(
         p["frame"], p["crank"], p["coupler"], p["rocker"], p["point_arc"], p["point_angle"],
         p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, A, B, P,
     )  # fmt: skip
