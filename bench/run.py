@@ -101,6 +101,36 @@ def bandwidths(megabytes: int = 400, repeats: int = 5) -> tuple[float, float]:
     return copy, fill
 
 
+def kernel_profile(kernels, planar_args, sphere_args, theta) -> dict[str, tuple[float, float]]:
+    """Where a kernel's time goes, without hardware counters (this machine's VM has none): on one
+    thread, the same kernel on a batch whose outputs stay in cache (256 mechanisms, 2.2 MB
+    planar) against the full batch (outputs in main memory). The first rate is what the
+    arithmetic allows; the gap to the second is the cost of memory."""
+    import numba
+
+    small = 256
+    rates = {}
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        for name, fn, args, width in (
+            ("planar kernel (a), one thread", kernels.fourbar_positions, planar_args, 2),
+            ("spherical kernel (c), one thread", kernels.spherical_fourbar_positions,
+             sphere_args, 3),
+        ):  # fmt: skip
+            n = args[2].shape[0]
+            head = tuple(a[:small] for a in args)
+            out_small = tuple(np.empty((small, theta.size, width)) for _ in MOVING_JOINTS)
+            out_full = tuple(np.empty((n, theta.size, width)) for _ in MOVING_JOINTS)
+            t_hot = best_of(lambda fn=fn, a=head, o=out_small: fn(*a, theta, out=o), 20)
+            t_cold = best_of(lambda fn=fn, a=args, o=out_full: fn(*a, theta, out=o), 5)
+            joints = len(MOVING_JOINTS) * theta.size
+            rates[name] = (joints * small / t_hot, joints * n / t_cold)
+    finally:
+        numba.set_num_threads(threads)
+    return rates
+
+
 def check(name: str, got, reference: dict[str, np.ndarray], tol: float) -> None:
     worst = max(
         float(np.nanmax(np.abs(np.asarray(g) - reference[j])))
@@ -237,6 +267,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     del sref
     times_c = [(name, best_of(fn, args.repeats)) for name, fn in cases_c]
+    profile = kernel_profile(kernels, planar_args, sphere_args, theta) if kernels else None
 
     print()
     print("linkwright benchmark (issue 5): every figure measured in this run")
@@ -306,6 +337,17 @@ def main(argv: list[str] | None = None) -> int:
     fastest = min(t for name, t in times_b if name.startswith("linkwright"))
     verdict = "met" if fastest < 10e-6 else f"not met ({fastest * 1e6:.1f} us)"
     print(f"target: a 360-sample curve under 10 us: {verdict}")
+    print()
+    if profile is not None:
+        print()
+        print("profile: the kernels with their outputs in cache (compute alone) and in memory")
+        head = f"{'':<42} {'in cache':>12} {'in memory':>12} {'memory share':>13}"
+        print(head)
+        print("-" * len(head))
+        for name, (hot, cold) in profile.items():
+            print(f"{name:<42} {hot:>12.3e} {cold:>12.3e} {1 - cold / hot:>12.0%}")
+        print("(joint positions/s; memory share = the part of the in-memory time spent waiting on")
+        print(" memory, 1 − in-memory rate / in-cache rate)")
     print()
     print("(d) atlas descriptors, (e) path synthesis, (f) atlas query: not built yet (issues 6, 7)")
     print(f"total {time.perf_counter() - start:.1f} s")
