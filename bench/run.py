@@ -7,7 +7,8 @@ Run as ``python bench/run.py`` (``make bench``, which also installs the peers). 
     closed form of ``bench/baselines.py`` and pylinkage (when installed);
 (b) one four-bar × 360 inputs: the latency of a single call, positions and with derivatives;
 (c) 10,000 spherical crank-rockers × 360 inputs (plan, kernel, NumPy closed form);
-(d)–(f) the atlas descriptors, path synthesis and atlas query: their issues are not built yet.
+(d) 10^6 four-bars x 64 inputs reduced to curve descriptors (bench/descriptors.py, its own
+    process); (e) path synthesis is bench/synthesis.py; (f) the atlas query waits for issue 7.
 
 Every contestant's positions are checked against linkwright's plan before anything is timed.
 Rates count joint positions (3 moving joints per mechanism-sample). The bound is memory
@@ -131,6 +132,22 @@ def kernel_profile(kernels, planar_args, sphere_args, theta) -> dict[str, tuple[
     return rates
 
 
+def descriptor_case(curves: int, samples: int) -> dict:
+    """Case (d) in a process of its own, so that its peak memory is its own."""
+    import json
+    import subprocess
+    from pathlib import Path
+
+    script = Path(__file__).with_name("descriptors.py")
+    done = subprocess.run(
+        [sys.executable, str(script), "--curves", str(curves), "--samples", str(samples)],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 def check(name: str, got, reference: dict[str, np.ndarray], tol: float) -> None:
     worst = max(
         float(np.nanmax(np.abs(np.asarray(g) - reference[j])))
@@ -163,6 +180,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", type=int, default=360)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--latency-runs", type=int, default=300)
+    parser.add_argument("--descriptor-curves", type=int, default=1_000_000)
     args = parser.parse_args(argv)
     n, s = args.mechanisms, args.samples
     start = time.perf_counter()
@@ -349,7 +367,19 @@ def main(argv: list[str] | None = None) -> int:
         print("(joint positions/s; memory share = the part of the in-memory time spent waiting on")
         print(" memory, 1 − in-memory rate / in-cache rate)")
     print()
-    print("(d) atlas descriptors, (e) path synthesis, (f) atlas query: not built yet (issues 6, 7)")
+    d = descriptor_case(args.descriptor_curves, s_desc := 64)
+    print(
+        f"(d) {d['curves']:,} random crank-rockers x {s_desc} inputs -> descriptors (own process)"
+    )
+    print(
+        f"rate {d['rate']:.3e} curves/s (NumPy reference {d['reference_rate']:.3e}/s: "
+        f"{d['rate'] / d['reference_rate']:.1f}x), peak RSS {d['peak_rss_bytes'] / 2**20:.0f} MiB"
+    )
+    verdict = "met" if d["rate"] >= 1e6 else f"not met ({d['rate'] / 1e6:.0%} of it)"
+    print(f"target 1e6 curves/s: {verdict}; peak RSS under 1 GiB: "
+          f"{'met' if d['peak_rss_bytes'] < 2**30 else 'not met'}")  # fmt: skip
+    print()
+    print("(e) path synthesis: python bench/synthesis.py; (f) atlas query: not built yet (issue 7)")
     print(f"total {time.perf_counter() - start:.1f} s")
     return 0
 

@@ -35,6 +35,7 @@ from linkwright.engine.plan import ASSEMBLY_TOL, SINGULAR_MARGIN, SINGULAR_SIN
 __all__ = [
     "KernelInputError",
     "available",
+    "compiled",
     "fourbar_motion",
     "fourbar_positions",
     "positions",
@@ -276,7 +277,7 @@ def _spherical_kernel(
                     P[i, j, k] = rows[6 + k, j]
 
 
-_KERNELS: dict[str, Any] = {}
+_KERNELS: dict[tuple[Any, bool], Any] = {}
 
 
 def _numba() -> Any | None:
@@ -300,23 +301,31 @@ def available() -> bool:
     return _numba() is not None
 
 
-def _kernel(name: str, parallel: bool = True) -> Any:
-    # A batch of at most one chunk runs serially: starting threads costs more than it saves.
-    key = f"{name}-{'parallel' if parallel else 'serial'}"
+def compiled(plain: Callable[..., Any], parallel: bool = True) -> Callable[..., Any]:
+    """``plain`` compiled by numba (cached on disk, so a later process pays no compile), or
+    ``plain`` itself without numba. A loop over ``prange`` in ``plain``'s module runs on all
+    threads when ``parallel``; that module defines ``prange = range`` for the interpreted case.
+    """
+    key = (plain, parallel)
     if key not in _KERNELS:
-        plain = {
-            "planar": _planar_kernel,
-            "planar-motion": _planar_motion_kernel,
-            "sphere": _spherical_kernel,
-        }[name]
         numba = _numba()
         if numba is None:
             _KERNELS[key] = plain
         else:
-            global prange
-            prange = numba.prange  # resolved as a global when numba compiles the loops
+            # Resolved as a global when numba compiles the loops.
+            plain.__globals__["prange"] = numba.prange
             _KERNELS[key] = numba.njit(cache=True, fastmath=False, parallel=parallel)(plain)
     return _KERNELS[key]
+
+
+def _kernel(name: str, parallel: bool = True) -> Any:
+    # A batch of at most one chunk runs serially: starting threads costs more than it saves.
+    plain = {
+        "planar": _planar_kernel,
+        "planar-motion": _planar_motion_kernel,
+        "sphere": _spherical_kernel,
+    }[name]
+    return compiled(plain, parallel)
 
 
 def _theta(theta: ArrayLike) -> tuple[Array, Array]:

@@ -1,0 +1,152 @@
+"""Curve descriptors: invariances, the compiled kernel against the NumPy reference, ranking
+against the aligned error, and the aligned error against a brute-force least squares."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from linkwright.curves import CurveError, aligned_error, descriptor_variants, descriptors, resample
+from linkwright.curves.fourier import _descriptors_reference
+from linkwright.mechanisms import FourBar, solve
+
+
+def _coupler_curves(rng: np.random.Generator, n: int, samples: int = 90) -> np.ndarray:
+    """Closed coupler curves of Grashof crank-rockers (crank shortest, so every input turns)."""
+    frame, coupler, rocker = rng.uniform(0.6, 1.0, (3, n))
+    mech = FourBar(
+        A0=np.zeros((n, 2)),
+        B0=np.stack([frame, np.zeros(n)], -1),
+        crank=rng.uniform(0.05, 0.19, n),
+        coupler=coupler,
+        rocker=rocker,
+        u=rng.uniform(-1, 1, n),
+        v=rng.uniform(-1, 1, n),
+        assembly=rng.choice([-1.0, 1.0], n),
+    )
+    theta = np.linspace(0, 2 * np.pi, samples, endpoint=False)
+    motion = solve(mech, theta, order=0)
+    assert motion.valid.all()
+    return motion.positions["P"]
+
+
+def _moved(curve: np.ndarray, angle: float, scale: float, shift, roll: int, backwards: bool):
+    c, s = np.cos(angle), np.sin(angle)
+    out = curve[::-1] if backwards else curve
+    return scale * np.roll(out, roll, axis=0) @ np.array([[c, s], [-s, c]]) + np.asarray(shift)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    angle=st.floats(-np.pi, np.pi),
+    scale=st.floats(1e-3, 1e3),
+    shift=st.tuples(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3)),
+    roll=st.integers(0, 89),
+    backwards=st.booleans(),
+)
+def test_closed_descriptor_invariances(seed, angle, scale, shift, roll, backwards):
+    curve = _coupler_curves(np.random.default_rng(seed), 1)[0]
+    moved = _moved(curve, angle, scale, shift, roll, backwards)
+    d0 = descriptors(curve)
+    assert np.linalg.norm(d0) == pytest.approx(1.0)
+    # The stored descriptor is one of the moved curve's variants, to rounding (the canonical
+    # choice itself may differ where the normalisation's choices are nearly tied).
+    nearest = np.min(np.linalg.norm(descriptor_variants(moved) - d0, axis=-1))
+    assert nearest < 1e-8
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    angle=st.floats(-np.pi, np.pi),
+    scale=st.floats(1e-3, 1e3),
+    backwards=st.booleans(),
+)
+def test_open_descriptor_invariances(seed, angle, scale, backwards):
+    rng = np.random.default_rng(seed)
+    stroke = np.cumsum(rng.normal(size=(30, 2)), axis=0)
+    moved = _moved(stroke, angle, scale, (3.0, -7.0), 0, backwards)
+    d0 = descriptors(stroke, closed=False)
+    nearest = np.min(np.linalg.norm(descriptor_variants(moved, closed=False) - d0, axis=-1))
+    assert nearest < 1e-8
+
+
+def test_kernel_matches_numpy_reference():
+    rng = np.random.default_rng(3)
+    curves = _coupler_curves(rng, 300, samples=64)
+    curves[5, 7] = np.nan  # a linkage that does not assemble there
+    curves[6] = curves[6, :1]  # a curve of length 0
+    for closed in (True, False):
+        got = descriptors(curves, closed=closed)
+        want = _descriptors_reference(curves, closed=closed)
+        np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+        assert np.isnan(got[5]).all() and np.isnan(got[6]).all()
+        np.testing.assert_allclose(np.nan_to_num(got), np.nan_to_num(want), atol=1e-12)
+
+
+def test_polygon_coefficients_are_exact():
+    """A polygon's coefficients are its own: a square described through its 4 corners and
+    through 400 points along its sides gives the same descriptor (no resampling error)."""
+    corners = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
+    dense = resample(corners, 400)
+    np.testing.assert_allclose(descriptors(corners), descriptors(dense), atol=1e-13)
+
+
+def _brute_aligned_error(curve, target, samples):
+    a = resample(curve, samples)
+    b = resample(target, samples)
+    a = a[:, 0] + 1j * a[:, 1]
+    b = b[:, 0] + 1j * b[:, 1]
+    bc = b - b.mean()
+    best = np.inf
+    for seq in (a, a[::-1]):
+        for k in range(samples):
+            x = np.roll(seq, k)
+            design = np.stack([x, np.ones_like(x)], -1)
+            coef, *_ = np.linalg.lstsq(design, b, rcond=None)
+            best = min(best, np.sum(np.abs(design @ coef - b) ** 2))
+    return np.sqrt(best / np.sum(np.abs(bc) ** 2))
+
+
+def test_aligned_error_against_brute_force():
+    rng = np.random.default_rng(4)
+    curves = _coupler_curves(rng, 4)
+    for i in range(3):
+        got = aligned_error(curves[i], curves[i + 1], samples=64)
+        # The brute force tries whole shifts only; aligned_error also those in between.
+        brute = _brute_aligned_error(curves[i], curves[i + 1], 64)
+        assert brute * (1 - 1e-2) <= got <= brute + 1e-12
+    moved = _moved(curves[0], 1.0, 3.0, (2, 2), 11, True)
+    assert aligned_error(curves[0], moved) < 1e-3  # only the resampling's offset remains
+
+
+def test_descriptor_distance_ranks_like_aligned_error():
+    rng = np.random.default_rng(8)
+    atlas = _coupler_curves(rng, 200)
+    stored = descriptors(atlas)
+    hits = 0
+    for q in range(10):
+        query = _moved(atlas[q], 0.3 * q, 2.0, (1, -1), 7 * q, q % 2 == 1)
+        query = query + rng.normal(scale=1e-3, size=query.shape)  # a slightly shaky hand
+        variants = descriptor_variants(query)
+        dist = np.min(np.linalg.norm(stored[:, None, :] - variants[None], axis=-1), axis=1)
+        exact = aligned_error(atlas, query, samples=128)
+        # Spearman rank correlation between the two orderings of all 200 curves.
+        r = np.corrcoef(np.argsort(np.argsort(dist)), np.argsort(np.argsort(exact)))[0, 1]
+        assert r > 0.8
+        hits += int(np.argmin(dist) == q)
+    assert hits == 10
+
+
+def test_bad_curves_are_named():
+    with pytest.raises(CurveError, match="shape"):
+        descriptors(np.zeros((5, 3)))
+    with pytest.raises(CurveError, match="at least 3"):
+        descriptors([[0, 0], [1, 1]])
+    with pytest.raises(CurveError, match="harmonics"):
+        descriptors(np.eye(3, 2), harmonics=0)
+    with pytest.raises(CurveError, match="samples"):
+        resample(np.eye(3, 2), 2)
