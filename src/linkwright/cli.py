@@ -712,6 +712,203 @@ def papers(
 
 
 # --------------------------------------------------------------------------------------------
+# Synthesis
+# --------------------------------------------------------------------------------------------
+
+synth_app = typer.Typer(
+    help="Synthesis: from an ellipse, a path, target values or precision points to a linkage.",
+    no_args_is_help=True,
+)
+app.add_typer(synth_app, name="synth")
+
+QuietOpt = Annotated[bool, typer.Option("--quiet", help="No progress bar.")]
+
+# Points a point file may hold: far beyond any drawn curve, well below running out of memory.
+MAX_POINTS = 100_000
+
+
+def read_points(path: Path, columns: tuple[int, ...] = (2,)) -> list[list[float]]:
+    """Rows of numbers from a CSV (comma, semicolon or whitespace separated) point file.
+
+    A first line that is not numbers is a header and skipped; blank lines and lines starting
+    with ``#`` are skipped. Every other row must hold as many finite numbers as one of
+    ``columns`` says, all rows alike; anything else is a :class:`CliError` naming the line.
+    """
+    if not path.exists():
+        raise CliError(f"{path}: no such file")
+    if path.is_dir():
+        raise CliError(f"{path}: is a folder, not a point file")
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        raise CliError(f"{path}: not a text file (expected CSV rows of numbers)") from None
+    rows: list[list[float]] = []
+    width = None
+    for number, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        cells = [c for c in stripped.replace(";", ",").replace(",", " ").split() if c]
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            if not rows and width is None:
+                width = -1  # a header line: the next line starts the data
+                continue
+            raise CliError(f"{path}, line {number}: not numbers: {stripped!r}") from None
+        if width is None or width == -1:
+            width = len(values)
+            if width not in columns:
+                want = " or ".join(str(c) for c in columns)
+                raise CliError(f"{path}, line {number}: {width} columns, expected {want}")
+        elif len(values) != width:
+            raise CliError(f"{path}, line {number}: {len(values)} columns, the rows above have "
+                           f"{width}")  # fmt: skip
+        if not all(math.isfinite(v) for v in values):
+            raise CliError(f"{path}, line {number}: coordinates must be finite numbers")
+        rows.append(values)
+        if len(rows) > MAX_POINTS:
+            raise CliError(f"{path}: more than {MAX_POINTS} points")
+    if not rows:
+        raise CliError(f"{path}: no points in the file")
+    return rows
+
+
+class _Progress:
+    """A progress bar on standard error for a library call that reports fractions done."""
+
+    def __init__(self, label: str, quiet: bool) -> None:
+        self.label, self.quiet = label, quiet
+        self.bar: Any = None
+        self.done = 0
+
+    def __enter__(self) -> _Progress:
+        if not self.quiet:
+            self.bar = typer.progressbar(length=1000, label=self.label, file=sys.stderr)
+            self.bar.__enter__()
+        return self
+
+    def __call__(self, fraction: float) -> None:
+        if self.bar is None:
+            return
+        target = int(1000 * min(max(float(fraction), 0.0), 1.0))
+        if target > self.done:
+            self.bar.update(target - self.done)
+            self.done = target
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.bar is not None:
+            self.bar.__exit__(*exc)
+
+
+def _documents(value: Any) -> Any:
+    """The synthesis reports with every mechanism replaced by its document."""
+    from linkwright.io import mechanism_to_dict
+    from linkwright.mechanisms import Mechanism
+
+    if isinstance(value, Mechanism):
+        return mechanism_to_dict(value)
+    if isinstance(value, Mapping):
+        return {k: _documents(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_documents(v) for v in value]
+    return value
+
+
+def _floats(text: str, what: str, count: int | None = None) -> list[float]:
+    items = [t for t in text.replace(";", ",").split(",") if t.strip()]
+    values = [float(_decimal(t.strip(), what)) for t in items]
+    if count is not None and len(values) != count:
+        raise CliError(f"{what}: expected {count} numbers, got {len(values)}")
+    return values
+
+
+@synth_app.command("ellipse")
+def synth_ellipse(
+    conic: Annotated[
+        str | None,
+        typer.Option(
+            "--conic",
+            metavar="A,B,C,D,E,F",
+            help="Ellipse A·x² + B·xy + C·y² + D·x + E·y + F = 0 (any scale).",
+        ),
+    ] = None,
+    points: Annotated[
+        Path | None,
+        typer.Option("--points", metavar="FILE.csv", help="Points to fit an ellipse to."),
+    ] = None,
+    family_samples: Annotated[
+        int,
+        typer.Option(
+            "--family-samples",
+            metavar="N",
+            min=0,
+            max=10_000,
+            help="Members of the ∞² double-slider family to list.",
+        ),
+    ] = 0,
+    circle: Annotated[
+        str,
+        typer.Option(
+            "--circle",
+            metavar="small|large",
+            help="Which Cardan circle the family rolls: radius (a − b)/2 (paper 004's "
+            "section 4) or (a + b)/2.",
+        ),
+    ] = "small",
+    as_json: JsonOpt = False,
+    quiet: QuietOpt = False,
+) -> None:
+    """Double sliders (elliptic trammels) tracing an ellipse (paper 004): the canonical one and
+    members of a whole ∞² family, each as a document, with the traced curve's deviation.
+
+    Every double slider tracing the ellipse rolls one of two Cardan circles, so the ∞²
+    solutions come in two families (--circle)."""
+    from linkwright.synthesis.ellipse import EllipseError, ellipse_synthesis
+
+    if (conic is None) == (points is None):
+        raise CliError("give the ellipse as --conic A,B,C,D,E,F or as --points FILE.csv")
+    if circle not in ("small", "large"):
+        raise CliError(f"--circle: must be small or large, got {circle!r}")
+    coeffs = _floats(conic, "--conic", 6) if conic is not None else None
+    pts = read_points(points) if points is not None else None
+    try:
+        with _Progress("double sliders", quiet or family_samples < 50) as progress:
+            result = ellipse_synthesis(
+                coeffs, pts, family_samples, circle=circle, progress=progress
+            )
+    except EllipseError as exc:
+        raise CliError(str(exc)) from None
+    result = _documents(result)
+    if as_json:
+        sys.stdout.write(_dump(result))
+        return
+    t = result["trammel"]
+    out = [
+        f"# ellipse: centre ({_fmt(t['X0']).strip()}, {_fmt(t['Y0']).strip()}), "
+        f"axis angle {_fmt(t['beta_deg']).strip()} deg, semi-axes a = {_fmt(t['a']).strip()}, "
+        f"b = {_fmt(t['b']).strip()}"
+    ]
+    if "fit" in result:
+        f = result["fit"]
+        out.append(f"# fitted to {f['count']} points: RMS distance {f['rms']:.3g}, "
+                   f"max {f['max']:.3g}")  # fmt: skip
+    out.append(f"canonical trammel: deviation {result['canonical']['deviation']:.2e} (of a)")
+    out.append(_dumps_toml_mech(result["canonical"]["mechanism"]))
+    for member in result["family"]:
+        s1, s2 = member["slider_angles_deg"]
+        out.append(f"family member ({result['circle']} circle), guides at {s1:g} and {s2:g} deg "
+                   f"from the major axis: deviation {member['deviation']:.2e}")  # fmt: skip
+    sys.stdout.write("\n".join(out) + "\n")
+
+
+def _dumps_toml_mech(document: Mapping[str, Any]) -> str:
+    from linkwright.io.documents import dumps_toml
+
+    return dumps_toml(document).rstrip()
+
+
+# --------------------------------------------------------------------------------------------
 # Entry point
 # --------------------------------------------------------------------------------------------
 

@@ -17,8 +17,8 @@ with no resampling and so no aliasing: the invariances below hold to rounding. T
   (band-limited) curve from its centroid, so every descriptor has unit length;
 - rotation by φ multiplies every Z_n by e^{iφ}; moving the start point by a fraction s of the
   length multiplies Z_n by e^{2πins}. The pair is fixed by making Z_1 and Z_{−1} real and
-  positive; of the two pairs that do, the one whose largest even harmonic has a positive real
-  part is kept;
+  positive; of the two pairs that do, the one where the largest even harmonic's larger part
+  (real or imaginary) is positive is kept;
 - direction: running the curve backwards swaps Z_n and Z_{−n}; the direction with
   |Z_1| ≥ |Z_{−1}| (mostly counter-clockwise) is kept.
 
@@ -199,6 +199,7 @@ def _descriptor_kernel(x, y, harmonics, closed, out):
     for first in prange((count + chunk - 1) // chunk):
         # Scratch for one curve at a time, allocated once per task.
         zr, zi, ur, ui, ds = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+        wr, wi, qr, qi = np.empty(m), np.empty(m), np.empty(m), np.empty(m)
         acc = np.empty((4, k))
         for c in range(first * chunk, min(count, (first + 1) * chunk)):
             for j in range(m):
@@ -207,8 +208,9 @@ def _descriptor_kernel(x, y, harmonics, closed, out):
                 zi[j] = y[c, src]
             length = 0.0
             for j in range(m):
-                dx = zr[(j + 1) % m] - zr[j]
-                dy = zi[(j + 1) % m] - zi[j]
+                after = j + 1 if j + 1 < m else 0  # no integer modulo in the loop: it is slow
+                dx = zr[after] - zr[j]
+                dy = zi[after] - zi[j]
                 d = math.sqrt(dx * dx + dy * dy)
                 ds[j] = d
                 length += d
@@ -218,22 +220,29 @@ def _descriptor_kernel(x, y, harmonics, closed, out):
                 for q in range(out.shape[1]):
                     out[c, q] = np.nan
                 continue
-            acc[:] = 0.0
-            pr, pi, nr, ni = acc[0], acc[1], acc[2], acc[3]
+            # Per vertex: the tangent's jump (kept in ur, ui: the segment before is read first)
+            # and w = e^{−2πi s/L}; q holds w^n as n counts up.
             s_start = 0.0
+            last_r, last_i = ur[m - 1], ui[m - 1]
             for j in range(m):
-                jr = ur[j] - ur[j - 1]  # index −1 wraps to the last segment
-                ji = ui[j] - ui[j - 1]
+                jump_r, jump_i = ur[j] - last_r, ui[j] - last_i
+                last_r, last_i = ur[j], ui[j]
+                ur[j], ui[j] = jump_r, jump_i
                 angle = -two_pi * s_start / length
-                wr, wi = math.cos(angle), math.sin(angle)
-                qr, qi = 1.0, 0.0
-                for n in range(k):
-                    qr, qi = qr * wr - qi * wi, qr * wi + qi * wr
-                    pr[n] += jr * qr - ji * qi
-                    pi[n] += jr * qi + ji * qr
-                    nr[n] += jr * qr + ji * qi  # jump · conj(w^n)
-                    ni[n] += ji * qr - jr * qi
+                wr[j], wi[j] = math.cos(angle), math.sin(angle)
+                qr[j], qi[j] = 1.0, 0.0
                 s_start += ds[j]
+            pr, pi, nr, ni = acc[0], acc[1], acc[2], acc[3]
+            for n in range(k):
+                sum_pr = sum_pi = sum_nr = sum_ni = 0.0
+                for j in range(m):
+                    a, b = qr[j] * wr[j] - qi[j] * wi[j], qr[j] * wi[j] + qi[j] * wr[j]
+                    qr[j], qi[j] = a, b
+                    sum_pr += ur[j] * a - ui[j] * b
+                    sum_pi += ur[j] * b + ui[j] * a
+                    sum_nr += ur[j] * a + ui[j] * b  # jump · conj(w^n)
+                    sum_ni += ui[j] * a - ur[j] * b
+                pr[n], pi[n], nr[n], ni[n] = sum_pr, sum_pi, sum_nr, sum_ni
             # The common factor −L/(4π²n²) per harmonic (its sign and L cancel in the normalisation,
             # but 1/n² does not).
             for n in range(k):
@@ -249,20 +258,23 @@ def _descriptor_kernel(x, y, harmonics, closed, out):
                 am1 = math.atan2(ni[0], nr[0])
                 shift = 0.5 * (am1 - a1)
                 phi = -0.5 * (am1 + a1)
+                # e^{i(φ ± n·shift)} by repeated products: two sincos, not 4k.
+                sr, si = math.cos(shift), math.sin(shift)
+                ar, ai = math.cos(phi), math.sin(phi)
+                br, bi = ar, ai
                 for n in range(k):
-                    e = phi + (n + 1) * shift
-                    cr, ci = math.cos(e), math.sin(e)
-                    pr[n], pi[n] = pr[n] * cr - pi[n] * ci, pr[n] * ci + pi[n] * cr
-                    e = phi - (n + 1) * shift
-                    cr, ci = math.cos(e), math.sin(e)
-                    nr[n], ni[n] = nr[n] * cr - ni[n] * ci, nr[n] * ci + ni[n] * cr
-                # The other start/rotation pair negates the even harmonics: keep the one whose
-                # largest even real part is positive.
+                    ar, ai = ar * sr - ai * si, ar * si + ai * sr
+                    br, bi = br * sr + bi * si, bi * sr - br * si
+                    pr[n], pi[n] = pr[n] * ar - pi[n] * ai, pr[n] * ai + pi[n] * ar
+                    nr[n], ni[n] = nr[n] * br - ni[n] * bi, nr[n] * bi + ni[n] * br
+                # The other start/rotation pair negates the even harmonics: keep the one where the
+                # largest even harmonic's larger part (real or imaginary) is positive.
                 big, sign = -1.0, 1.0
                 for n in range(1, k, 2):
-                    for v in (pr[n], nr[n]):
-                        if abs(v) > big:
-                            big, sign = abs(v), v
+                    for vr, vi in ((pr[n], pi[n]), (nr[n], ni[n])):
+                        size = vr * vr + vi * vi
+                        if size > big:
+                            big, sign = size, vr if abs(vr) >= abs(vi) else vi
                 if sign < 0.0:
                     for n in range(1, k, 2):
                         pr[n], pi[n], nr[n], ni[n] = -pr[n], -pi[n], -nr[n], -ni[n]
@@ -367,7 +379,9 @@ def descriptors(
     out = np.empty((flat.shape[0], (4 if closed else 2) * harmonics))
     x = np.ascontiguousarray(flat[..., 0])
     y = np.ascontiguousarray(flat[..., 1])
-    compiled(_descriptor_kernel, parallel=flat.shape[0] > 64)(x, y, harmonics, closed, out)
+    compiled(_descriptor_kernel, parallel=flat.shape[0] > 64, reassociate=True)(
+        x, y, harmonics, closed, out
+    )
     return out.reshape(p.shape[:-2] + out.shape[-1:])
 
 
@@ -386,12 +400,15 @@ def _descriptors_reference(
         re = v[..., : 2 * k]
         forwards = np.abs(re[..., 0, 0]) >= np.abs(re[..., 0, k])
         pair = np.where(forwards, 0, 2)
-        # Start/rotation pair: the largest even harmonic's real part positive.
+        # Start/rotation pair: the largest even harmonic's larger part (real or imaginary)
+        # positive; the other pair negates every even harmonic.
         first = np.take_along_axis(v, pair[..., None, None], axis=-2)[..., 0, :]
         even = np.arange(1, k, 2)  # positions of Z_2, Z_4, … among Z_1 … Z_k
-        evens = np.concatenate([first[..., even], first[..., k + even]], axis=-1)
-        big = np.argmax(np.abs(evens), axis=-1)
-        flip = np.take_along_axis(evens, big[..., None], axis=-1)[..., 0] < 0
+        slots = np.concatenate([even, k + even])
+        re, im = first[..., slots], first[..., 2 * k + slots]
+        big = np.argmax(re * re + im * im, axis=-1)[..., None]
+        r, i = np.take_along_axis(re, big, -1)[..., 0], np.take_along_axis(im, big, -1)[..., 0]
+        flip = np.where(np.abs(r) >= np.abs(i), r, i) < 0
         choice = pair + flip
     else:
         # Either end first: the one whose Z_2 has the larger real part.

@@ -277,7 +277,7 @@ def _spherical_kernel(
                     P[i, j, k] = rows[6 + k, j]
 
 
-_KERNELS: dict[tuple[Any, bool], Any] = {}
+_KERNELS: dict[tuple[Any, bool, bool], Any] = {}
 
 
 def _numba() -> Any | None:
@@ -301,12 +301,16 @@ def available() -> bool:
     return _numba() is not None
 
 
-def compiled(plain: Callable[..., Any], parallel: bool = True) -> Callable[..., Any]:
+def compiled(
+    plain: Callable[..., Any], parallel: bool = True, reassociate: bool = False
+) -> Callable[..., Any]:
     """``plain`` compiled by numba (cached on disk, so a later process pays no compile), or
     ``plain`` itself without numba. A loop over ``prange`` in ``plain``'s module runs on all
     threads when ``parallel``; that module defines ``prange = range`` for the interpreted case.
+    ``reassociate`` lets LLVM reorder sums (so it can vectorise reductions): results then differ
+    from the interpreted ones in the last bits. NaN and infinity keep their meaning either way.
     """
-    key = (plain, parallel)
+    key = (plain, parallel, reassociate)
     if key not in _KERNELS:
         numba = _numba()
         if numba is None:
@@ -314,7 +318,8 @@ def compiled(plain: Callable[..., Any], parallel: bool = True) -> Callable[..., 
         else:
             # Resolved as a global when numba compiles the loops.
             plain.__globals__["prange"] = numba.prange
-            _KERNELS[key] = numba.njit(cache=True, fastmath=False, parallel=parallel)(plain)
+            fastmath = {"reassoc", "contract"} if reassociate else False
+            _KERNELS[key] = numba.njit(cache=True, fastmath=fastmath, parallel=parallel)(plain)
     return _KERNELS[key]
 
 

@@ -1,0 +1,127 @@
+"""``linkwright synth ...``: every printed mechanism is re-read as a document and simulated
+here, and what it traces is checked against the request (not against the command's own
+numbers)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from linkwright.cli import main
+from linkwright.io import parse_document
+from linkwright.mechanisms import solve
+
+
+def run(capsys, *args: str) -> tuple[int, str, str]:
+    status = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def run_json(capsys, *args: str) -> dict:
+    status, out, err = run(capsys, *args, "--json", "--quiet")
+    assert status == 0, err
+    return json.loads(out)
+
+
+def _conic_value(coeffs, xy):
+    A, B, C, D, E, F = coeffs
+    x, y = xy[..., 0], xy[..., 1]
+    return A * x * x + B * x * y + C * y * y + D * x + E * y + F
+
+
+def _traced(document: dict) -> np.ndarray:
+    mech = parse_document(document).mechanism
+    theta = np.linspace(0, 2 * np.pi, 73)
+    return solve(mech, theta, order=0).positions["P"]
+
+
+def test_ellipse_from_conic_every_document_traces_it(capsys):
+    # (x − 1)²/16 + (y + 2)²/4 = 1 turned by 30°, written at an odd scale and sign.
+    c, s = np.cos(np.pi / 6), np.sin(np.pi / 6)
+    t = np.linspace(0, 2 * np.pi, 7, endpoint=False)
+    pts = np.stack([4 * np.cos(t), 2 * np.sin(t)], -1) @ [[c, s], [-s, c]] + [1, -2]
+    # The conic through those points, by the null space of the design matrix (independent of
+    # the synthesis code's conic handling).
+    x, y = pts[:, 0], pts[:, 1]
+    design = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x)], -1)
+    conic = -3.7 * np.linalg.svd(design)[2][-1]
+    r = run_json(capsys, "synth", "ellipse", "--conic", ",".join(repr(float(v)) for v in conic),
+                 "--family-samples", "5")  # fmt: skip
+    assert r["trammel"]["a"] == pytest.approx(4, rel=1e-9)
+    assert r["trammel"]["b"] == pytest.approx(2, rel=1e-9)
+    docs = [r["canonical"]["mechanism"]] + [m["mechanism"] for m in r["family"]]
+    assert len(docs) == 6
+    scale = np.abs(conic).max()
+    for doc in docs:
+        P = _traced(doc)
+        assert np.all(np.isfinite(P))
+        assert np.abs(_conic_value(conic, P)).max() < 1e-9 * scale
+
+
+def test_ellipse_from_points_reports_the_fit(capsys, tmp_path):
+    t = np.linspace(0, 2 * np.pi, 40, endpoint=False)
+    pts = np.stack([3 * np.cos(t) + 2, np.sin(t) - 1], -1)
+    f = tmp_path / "pts.csv"
+    f.write_text("x,y\n" + "\n".join(f"{float(a)!r},{float(b)!r}" for a, b in pts) + "\n")
+    r = run_json(capsys, "synth", "ellipse", "--points", f)
+    assert r["fit"]["count"] == 40 and r["fit"]["rms"] < 1e-9
+    P = _traced(r["canonical"]["mechanism"])
+    assert np.abs(((P[:, 0] - 2) / 3) ** 2 + (P[:, 1] + 1) ** 2 - 1).max() < 1e-9
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("", "no points"),
+        ("x,y\n", "no points"),
+        ("1,2\n3,4,5\n", "line 2: 3 columns"),
+        ("1,2\n3,abc\n", "line 2: not numbers"),
+        ("1,2,3\n", "3 columns, expected 2"),
+        ("1,nan\n", "finite"),
+    ],
+)
+def test_point_files_bad_content(capsys, tmp_path, content, message):
+    f = tmp_path / "bad.csv"
+    f.write_text(content)
+    status, out, err = run(capsys, "synth", "ellipse", "--points", f)
+    assert status == 2 and out == ""
+    assert message in err and err.startswith("error:") and err.count("\n") == 1
+
+
+@pytest.mark.parametrize(
+    ("conic", "kind"),
+    [
+        ("1,0,-1,0,0,-1", "hyperbola"),
+        ("0,0,1,-1,0,0", "parabola"),
+        ("1,0,1,0,0,1", "imaginary"),
+        ("1,0,1,0,0,0", "point"),
+    ],
+)
+def test_not_an_ellipse_is_named(capsys, conic, kind):
+    status, _, err = run(capsys, "synth", "ellipse", "--conic", conic)
+    assert status == 2 and kind in err
+
+
+def test_ellipse_needs_exactly_one_source(capsys, tmp_path):
+    assert run(capsys, "synth", "ellipse")[0] == 2
+    f = tmp_path / "p.csv"
+    f.write_text("0,0\n")
+    status, _, err = run(capsys, "synth", "ellipse", "--conic", "1,0,1,0,0,-1", "--points", f)
+    assert status == 2 and "--conic" in err
+    assert run(capsys, "synth", "ellipse", "--conic", "1,0,1")[0] == 2
+
+
+def test_both_cardan_families_trace_the_ellipse(capsys):
+    conic = [1.0, 0.0, 4.0, -2.0, 8.0, -11.0]  # (x − 1)²/16 + (y + 1)²/4 = 1, multiplied out
+    for circle in ("small", "large"):
+        r = run_json(capsys, "synth", "ellipse", "--conic", ",".join(map(str, conic)),
+                     "--family-samples", "3", "--circle", circle)  # fmt: skip
+        assert r["circle"] == circle
+        for m in r["family"]:
+            P = _traced(m["mechanism"])
+            assert np.abs(_conic_value(conic, P)).max() < 1e-9 * 11
+    status, _, err = run(capsys, "synth", "ellipse", "--conic", "1,0,1,0,0,-1", "--circle", "x")
+    assert status == 2 and "--circle" in err
