@@ -125,3 +125,44 @@ def test_both_cardan_families_trace_the_ellipse(capsys):
             assert np.abs(_conic_value(conic, P)).max() < 1e-9 * 11
     status, _, err = run(capsys, "synth", "ellipse", "--conic", "1,0,1,0,0,-1", "--circle", "x")
     assert status == 2 and "--circle" in err
+
+
+def test_targets_paper003_example_both_solutions_hit_the_targets(capsys):
+    from linkwright.analysis import coefficients
+
+    r = run_json(capsys, "synth", "targets", "--family", "spherical-fourbar", "--fix",
+                 "crank=80,frame=10", "--free", "coupler,rocker", "--target", "max_Ke=1.47",
+                 "--target", "max_Kp=1.49", "--kind", "double-crank", "--grid", "13")  # fmt: skip
+    assert len(r["solutions"]) == 2
+    for sol in r["solutions"]:
+        mech = parse_document(sol["mechanism"]).mechanism
+        got = coefficients(mech)  # recomputed here from the document alone
+        assert float(got["K_epsilon"]) == pytest.approx(1.47, abs=1e-8)
+        assert float(got["K_p"]) == pytest.approx(1.49, abs=1e-8)
+        assert sol["condition"] > 100  # paper 003's design is ill-conditioned
+
+
+def test_targets_bad_arguments(capsys):
+    base = ["synth", "targets", "--family", "fourbar", "--fix", "crank=1,frame=4", "--free",
+            "coupler,rocker", "--target", "swing=40"]  # fmt: skip
+    status, _, err = run(capsys, *base[:-1], "nonsense=3")
+    assert status == 2 and "nonsense" in err
+    status, _, err = run(capsys, *base, "--bound", "coupler=3")
+    assert status == 2 and "LOW:HIGH" in err
+    status, _, err = run(capsys, *base[:5], "crank=1,crank=2", *base[6:])
+    assert status == 2 and "twice" in err
+
+
+def test_reinsberg_completion_is_thales(capsys, tmp_path):
+    doc = tmp_path / "fb.toml"
+    doc.write_text('format = "linkwright/1"\n[mechanism]\nfamily = "fourbar"\nA0 = [0, 0]\n'
+                   'B0 = [4, 0]\ncrank = 1\ncoupler = 3\nrocker = 2\n')  # fmt: skip
+    status, out, err = run(capsys, "synth", "reinsberg", doc, "--solve", "coupler", "--json")
+    assert status == 0, err
+    r = json.loads(out)
+    m = r["mechanism"]["mechanism"]
+    # L1² + L4² = L2² + L3² (paper 003): the coupler is √(1 + 16 − 4).
+    assert m["coupler"] == pytest.approx(13**0.5, rel=1e-12)
+    assert abs(r["after_deg"]) < 1e-9
+    status, _, err = run(capsys, "synth", "reinsberg", doc, "--solve", "wheel")
+    assert status == 2 and "wheel" in err

@@ -775,7 +775,8 @@ def read_points(path: Path, columns: tuple[int, ...] = (2,)) -> list[list[float]
 
 
 class _Progress:
-    """A progress bar on standard error for a library call that reports fractions done."""
+    """A progress bar on standard error for a library call that reports fractions done; only on
+    a terminal (a log or a pipe gets no bar characters), and not with ``--quiet``."""
 
     def __init__(self, label: str, quiet: bool) -> None:
         self.label, self.quiet = label, quiet
@@ -783,7 +784,7 @@ class _Progress:
         self.done = 0
 
     def __enter__(self) -> _Progress:
-        if not self.quiet:
+        if not self.quiet and sys.stderr.isatty():
             self.bar = typer.progressbar(length=1000, label=self.label, file=sys.stderr)
             self.bar.__enter__()
         return self
@@ -900,6 +901,162 @@ def synth_ellipse(
         out.append(f"family member ({result['circle']} circle), guides at {s1:g} and {s2:g} deg "
                    f"from the major axis: deviation {member['deviation']:.2e}")  # fmt: skip
     sys.stdout.write("\n".join(out) + "\n")
+
+
+def _assignments(items: Sequence[str], what: str) -> dict[str, str]:
+    """``name=value`` items (each may itself be a comma list) as a dict of strings."""
+    out: dict[str, str] = {}
+    for item in items:
+        for part in [p for p in item.split(",") if p.strip()] if "=" in item else [item]:
+            if "=" not in part:
+                raise CliError(f"{what}: expected name=value, got {part!r}")
+            name, value = (t.strip() for t in part.split("=", 1))
+            if name in out:
+                raise CliError(f"{what}: {name} given twice")
+            out[name] = value
+    return out
+
+
+@synth_app.command("targets")
+def synth_targets(
+    family: Annotated[
+        str, typer.Option("--family", metavar="fourbar|spherical-fourbar", help="Family.")
+    ],
+    fix: Annotated[
+        list[str],
+        typer.Option(
+            "--fix",
+            metavar="LINK=VALUE[,…]",
+            help="Fixed links (crank, coupler, rocker, frame); arcs in degrees.",
+        ),
+    ],
+    free: Annotated[
+        str, typer.Option("--free", metavar="LINK[,…]", help="The links to solve for.")
+    ],
+    target: Annotated[
+        list[str],
+        typer.Option(
+            "--target",
+            metavar="OUTPUT=VALUE",
+            help="max_Kw, max_Ke, max_Kp, delta, time_ratio, swing, gamma_min, "
+            "gamma_max (angles in degrees).",
+        ),
+    ],
+    bound: Annotated[
+        list[str] | None,
+        typer.Option("--bound", metavar="LINK=LOW:HIGH", help="Search box of a free link."),
+    ] = None,
+    kind: Annotated[
+        str | None,
+        typer.Option("--kind", metavar="CLASS", help="Only this class, e.g. double-crank."),
+    ] = None,
+    grid: Annotated[
+        int | None,
+        typer.Option("--grid", metavar="N", min=3, max=400, help="Grid nodes per free link."),
+    ] = None,
+    tol: Annotated[float, typer.Option("--tol", metavar="T", min=0.0)] = 1e-9,
+    as_json: JsonOpt = False,
+    quiet: QuietOpt = False,
+) -> None:
+    """Every four-bar in the search box whose named outputs hit their target values (paper
+    003's synthesis), with each solution's conditioning; least squares with more targets than
+    free links."""
+    from linkwright.synthesis.targets import TargetError, design_fourbar
+
+    fixed = {k: float(_decimal(v, f"--fix {k}")) for k, v in _assignments(fix, "--fix").items()}
+    goals = {
+        k: float(_decimal(v, f"--target {k}")) for k, v in _assignments(target, "--target").items()
+    }
+    bounds: dict[str, tuple[float, float]] = {}
+    for name, text in _assignments(bound or [], "--bound").items():
+        low, sep, high = text.partition(":")
+        if not sep:
+            raise CliError(f"--bound {name}: expected LOW:HIGH, got {text!r}")
+        bounds[name] = (float(_decimal(low, "--bound")), float(_decimal(high, "--bound")))
+    names = [n.strip() for n in free.split(",") if n.strip()]
+    try:
+        with _Progress("searching", quiet) as progress:
+            found = design_fourbar(
+                family, fixed, names, goals, bounds=bounds or None, kind=kind, grid=grid,
+                tol=tol, degrees=True, progress=progress,
+            )  # fmt: skip
+    except TargetError as exc:
+        raise CliError(str(exc)) from None
+    report = found.report()
+    for entry, solution in zip(report["solutions"], found, strict=True):
+        entry["mechanism"] = solution.mechanism
+    report = _documents(report)
+    if as_json:
+        sys.stdout.write(_dump(report))
+        return
+    out = [f"# {len(report['solutions'])} solution(s) in the box; {report['evaluated']} grid "
+           f"points evaluated"]  # fmt: skip
+    for i, sol in enumerate(report["solutions"], start=1):
+        units = report["units"]
+        xs = ", ".join(f"{k} = {v:.6g} {units.get(k, '')}".rstrip() for k, v in sol["x"].items())
+        vals = ", ".join(f"{k} = {v:.6g}" for k, v in sol["values"].items())
+        out.append(f"solution {i}: {xs}; {vals}; residual {sol['residual']:.2e}, condition "
+                   f"{sol['condition']:.3g}")  # fmt: skip
+    sys.stdout.write("\n".join(out) + "\n")
+
+
+@synth_app.command("reinsberg")
+def synth_reinsberg(
+    file: FileArg,
+    solve_for: Annotated[
+        str,
+        typer.Option(
+            "--solve",
+            metavar="LINK",
+            help="The link to solve for: crank, coupler, rocker or frame.",
+        ),
+    ],
+    kind: Annotated[
+        str | None,
+        typer.Option("--kind", metavar="CLASS", help="Only a root of this class counts."),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Complete a four-bar to Reinsberg's optimal transmission (paper 003): the one length or
+    arc that makes the extreme transmission angles sum to 180°."""
+    import numpy as np
+
+    from linkwright.mechanisms import FourBar, SphericalFourBar
+    from linkwright.synthesis.reinsberg import (
+        ReinsbergError,
+        reinsberg_defect,
+        reinsberg_mechanism,
+    )
+
+    doc = _load(file)
+    mech = doc.mechanism
+    if not isinstance(mech, FourBar | SphericalFourBar):
+        raise CliError(f"reinsberg: a fourbar or spherical-fourbar document, not {mech.family}")
+    try:
+        done = reinsberg_mechanism(mech, solve_for, kind=kind)
+    except (ReinsbergError, ValueError) as exc:
+        raise CliError(str(exc)) from None
+    value = float(np.asarray(getattr(done, solve_for)))
+    arc = isinstance(mech, SphericalFourBar)
+    result = {
+        "before_deg": float(np.degrees(reinsberg_defect(mech))),
+        "field": solve_for,
+        "value": float(np.degrees(value)) if arc else value,
+        "unit": "deg" if arc else "length",
+        "after_deg": float(np.degrees(reinsberg_defect(done))),
+        "mechanism": done,
+    }
+    result = _documents(result)
+    if as_json:
+        sys.stdout.write(_dump(result))
+        return
+    unit = " deg" if arc else ""
+    sys.stdout.write(
+        f"{solve_for} = {result['value']:.9g}{unit}: γ1 + γ2 − 180° goes from "
+        f"{_fmt(result['before_deg'], 0, 6)} to {_fmt(result['after_deg'], 0, 9)} deg\n"
+        + _dumps_toml_mech(result["mechanism"])
+        + "\n"
+    )
 
 
 def _dumps_toml_mech(document: Mapping[str, Any]) -> str:

@@ -29,7 +29,9 @@ Spherical halves (:func:`reproduce_spherical`; α1 crank, α2 coupler, α3 outpu
   printed crank 80° with coupler arcs 180° − α2 = 115°…100°.
 - The synthesis example (:func:`synthesis_example`): the paper's answer α2 = 66.25°,
   α3 = 58.84° gives exactly the max|Kε| = 1.488 and max|Kp| = 1.515 it claims when the crank is
-  read as 100°, so the example used that reading too; the exact solution is elsewhere.
+  read as 100°, so the example used that reading too; the exact solution is elsewhere. Over all
+  double cranks with 1° ≤ α2, α3 ≤ 179° (both readings) there is exactly one mechanism that
+  meets the targets (two solutions, the axis B taken either way), and it is ill-conditioned.
 """
 
 from __future__ import annotations
@@ -41,7 +43,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.optimize import root
 
 from linkwright.analysis import (
     balanced_mu,
@@ -51,6 +52,7 @@ from linkwright.analysis import (
     transmission_extremes,
 )
 from linkwright.mechanisms import FourBar, SphericalFourBar, solve
+from linkwright.synthesis.targets import design_fourbar
 
 __all__ = [
     "TABLE1_PLANAR",
@@ -418,65 +420,117 @@ def reproduce_spherical() -> list[Cell]:
     return cells
 
 
-def _synthesis_solve(crank: float, start: tuple[float, float], step: float = 1e-5) -> dict:
-    """(α2, α3) in degrees with max|Kε| and max|Kp| at the synthesis targets, by Newton (hybr).
+SYNTHESIS_GRID = 17
+"""Grid nodes per free arc for the synthesis search (α2 and α3 over 1°…179°)."""
 
-    Each evaluation is one batched run of the exact coefficients at the point and at two
-    forward-differenced neighbours (the coefficients are exact to ~1e-12, so a 1e-5° step gives
-    the Jacobian to ~1e-7).
-    """
+
+def _reading(crank: float, alpha2: float, alpha3: float, extra: dict | None = None) -> dict:
+    """One mechanism of the example with its exact coefficients, in degrees."""
+    co = coefficients(_sphere(crank, alpha2, alpha3, 10.0))
+    k = np.array([float(co["K_epsilon"]), float(co["K_p"])])
     target = np.array([SYNTHESIS_TARGET["K_epsilon"], SYNTHESIS_TARGET["K_p"]])
-
-    def values(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        pts = np.array([x, x + [step, 0.0], x + [0.0, step]])
-        co = coefficients(_sphere(crank, pts[:, 0], pts[:, 1], 10.0))
-        k = np.stack((co["K_epsilon"], co["K_p"]), axis=-1)
-        return k[0] - target, (k[1:] - k[0]).T / step
-
-    sol = root(values, np.asarray(start, float), jac=True, method="hybr", options={"xtol": 1e-12})
-    co = coefficients(_sphere(crank, sol.x[0], sol.x[1], 10.0))
-    return {
+    out = {
         "crank": crank,
-        "alpha2": float(sol.x[0]),
-        "alpha3": float(sol.x[1]),
+        "alpha2": alpha2,
+        "alpha3": alpha3,
         "K_epsilon": float(co["K_epsilon"]),
         "K_p": float(co["K_p"]),
         "K_omega": float(co["K_omega"]),
         "delta": float(co["delta"]),
-        "converged": bool(sol.success)
-        and bool(np.max(np.abs(np.array([co["K_epsilon"], co["K_p"]]) - target)) < 1e-9),
+        "converged": bool(np.max(np.abs(k - target)) < 1e-9),
     }
+    out.update(extra or {})
+    return out
 
 
 def synthesis_example() -> dict[str, Any]:
-    """Paper 003's synthesis example solved on the exact coefficients.
+    """Paper 003's synthesis example solved on the exact coefficients, every solution.
 
     α1 = 80°, α4 = 10°, targets max|Kε| = 1.47, max|Kp| = 1.49. The paper solves its fitted
     regressions (eq. 9, coefficients not printed) and prints α2 = 66.25°, α3 = 58.84°, which it
-    says give 1.488 and 1.515. Here the two exact maxima are solved for (α2, α3) with the crank
-    read as 100° (the reading with which Table 3 reproduces), starting from the printed answer,
-    and with the crank as printed (80°), starting from the printed answer with the axis A
-    flipped (α2 → 180° − α2), which is the same mechanism. Near these proportions the level
-    curves of max|Kε| and max|Kp| are almost parallel, so a 1 % change of a target moves the
-    answer by several degrees: the regressions' answer meets the targets to 2 % yet lies far
-    from the exact one.
+    says give 1.488 and 1.515. Here the two exact maxima are solved for (α2, α3) by
+    :func:`linkwright.synthesis.targets.design_fourbar` over the whole square 1° ≤ α2, α3 ≤ 179°
+    of double cranks with the crank as printed (80°). That square holds both readings of the
+    crank arc: the reading with which Table 3 reproduces (100°, SEED-NOTES) is the printed
+    crank with the axis A flipped, α2 → 180° − α2, the same mechanism. Flipping the axis B too
+    (α2, α3 → their supplements) gives the same mechanism again, so the solutions come in such
+    pairs.
 
-    Returns ``read_100`` and ``literal_80`` (each ``alpha2``, ``alpha3``, the coefficients
-    there and ``converged``), ``printed`` (the paper's answer and claims) and
-    ``printed_answer_exact`` (our exact coefficients at the printed α2, α3 for both readings).
+    The search finds two solutions, one mechanism: α2 = 103.635°, α3 = 52.457° (crank 80°),
+    i.e. α2 = 76.365° read with the crank 100°, and its B-flipped twin. Near these proportions
+    the level curves of max|Kε| and max|Kp| are almost parallel (condition number ~270), so a
+    change of 0.01 in a target moves α2 by ~16°: the regressions' answer meets the targets to
+    2 % yet lies far from the exact one.
+
+    Returns ``target``, ``printed`` (the paper's answer and claims), ``solutions`` (each:
+    ``alpha2`` with the crank 80°, ``alpha2_read_100``, ``alpha3``, the exact coefficients,
+    ``residual``, ``condition``, ``singular_values`` and ``sensitivity``: free arc → target →
+    degrees per unit of the target), ``search`` (box, grid, mechanisms evaluated, seeds),
+    ``read_100`` and ``literal_80`` (the solution nearest the paper's answer in the 100°
+    reading, with the crank 100° and 80°: ``alpha2``, ``alpha3``, the coefficients there and
+    ``converged``) and ``printed_answer_exact`` (our exact coefficients at the printed α2, α3
+    for both readings).
     """
+    found = design_fourbar(
+        "spherical-fourbar",
+        {"crank": TABLE3_CRANK_PRINTED, "frame": 10.0},
+        ["coupler", "rocker"],
+        {"max_Ke": SYNTHESIS_TARGET["K_epsilon"], "max_Kp": SYNTHESIS_TARGET["K_p"]},
+        kind="double-crank",
+        grid=SYNTHESIS_GRID,
+        degrees=True,
+    )
+    report = found.report()
+    solutions = []
+    for sol, rep in zip(found, report["solutions"], strict=True):
+        a2, a3 = (float(v) for v in np.degrees(sol.x))
+        co = coefficients(sol.mechanism)
+        solutions.append(
+            {
+                "alpha2": a2,
+                "alpha2_read_100": 180.0 - a2,
+                "alpha3": a3,
+                "K_epsilon": float(co["K_epsilon"]),
+                "K_p": float(co["K_p"]),
+                "K_omega": float(co["K_omega"]),
+                "delta": float(co["delta"]),
+                "residual": rep["residual"],
+                "condition": rep["condition"],
+                "singular_values": rep["singular_values"],
+                "sensitivity": {
+                    {"coupler": "alpha2", "rocker": "alpha3"}[arc]: {
+                        {"max_Ke": "K_epsilon", "max_Kp": "K_p"}[t]: v for t, v in row.items()
+                    }
+                    for arc, row in rep["sensitivity"].items()
+                },
+            }
+        )
     pa2, pa3 = SYNTHESIS_PRINTED["alpha2"], SYNTHESIS_PRINTED["alpha3"]
     at_printed = {}
     for name, crank in (("read_100", TABLE3_CRANK), ("literal_80", TABLE3_CRANK_PRINTED)):
         co = coefficients(_sphere(crank, pa2, pa3, 10.0))
         at_printed[name] = {k: float(co[k]) for k in ("K_omega", "K_epsilon", "K_p", "delta")}
-    return {
+    out: dict[str, Any] = {
         "target": dict(SYNTHESIS_TARGET),
         "printed": dict(SYNTHESIS_PRINTED),
-        "read_100": _synthesis_solve(TABLE3_CRANK, (pa2, pa3)),
-        "literal_80": _synthesis_solve(TABLE3_CRANK_PRINTED, (180.0 - pa2, pa3)),
+        "solutions": solutions,
+        "search": {
+            "box_deg": [list(b) for b in report["bounds"].values()],
+            "grid": report["grid"],
+            "evaluated": report["evaluated"],
+            "seeds": report["seeds"],
+        },
         "printed_answer_exact": at_printed,
     }
+    if solutions:
+        near = min(
+            solutions,
+            key=lambda s: math.hypot(s["alpha2_read_100"] - pa2, s["alpha3"] - pa3),
+        )
+        extra = {"condition": near["condition"], "residual": near["residual"]}
+        out["read_100"] = _reading(TABLE3_CRANK, near["alpha2_read_100"], near["alpha3"], extra)
+        out["literal_80"] = _reading(TABLE3_CRANK_PRINTED, near["alpha2"], near["alpha3"], extra)
+    return out
 
 
 # --- the page and the CSV files ----------------------------------------------------------------
@@ -641,8 +695,7 @@ def markdown(cells: list[Cell], synthesis: dict[str, Any] | None = None) -> str:
         "",
     ]
     if synthesis is not None:
-        r, lit, pr = synthesis["read_100"], synthesis["literal_80"], synthesis["printed"]
-        ex = synthesis["printed_answer_exact"]
+        pr, ex = synthesis["printed"], synthesis["printed_answer_exact"]
         lines += [
             "## Synthesis example (α1 = 80°, α4 = 10°, max|Kε| = 1.47, max|Kp| = 1.49)",
             "",
@@ -654,15 +707,51 @@ def markdown(cells: list[Cell], synthesis: dict[str, Any] | None = None) -> str:
             f"{ex['read_100']['K_epsilon']:.4f} | {ex['read_100']['K_p']:.4f} |",
             f"| paper's answer, exact, crank 80° | {pr['alpha2']} | {pr['alpha3']} | "
             f"{ex['literal_80']['K_epsilon']:.4f} | {ex['literal_80']['K_p']:.4f} |",
-            f"| exact solution, crank 100° | {r['alpha2']:.4f} | {r['alpha3']:.4f} | "
-            f"{r['K_epsilon']:.6f} | {r['K_p']:.6f} |",
-            f"| exact solution, crank 80° | {lit['alpha2']:.4f} | {lit['alpha3']:.4f} | "
-            f"{lit['K_epsilon']:.6f} | {lit['K_p']:.6f} |",
+        ]
+        if "read_100" in synthesis:
+            r, lit = synthesis["read_100"], synthesis["literal_80"]
+            lines += [
+                f"| exact solution, crank 100° | {r['alpha2']:.4f} | {r['alpha3']:.4f} | "
+                f"{r['K_epsilon']:.6f} | {r['K_p']:.6f} |",
+                f"| exact solution, crank 80° | {lit['alpha2']:.4f} | {lit['alpha3']:.4f} | "
+                f"{lit['K_epsilon']:.6f} | {lit['K_p']:.6f} |",
+            ]
+        search = synthesis["search"]
+        (lo2, hi2), (lo3, hi3) = search["box_deg"]
+        lines += [
             "",
-            "The two exact solutions are one mechanism (α2 → 180° − α2 flips the axis A). Near "
-            "these proportions max|Kε| and max|Kp| have almost parallel level curves, so the "
-            "design problem is ill-conditioned: the paper's answer meets the targets to 2 % but "
-            "lies about 10° from the exact one.",
+            f"Every solution with the crank as printed (80°) and {lo2:g}° ≤ α2 ≤ {hi2:g}°, "
+            f"{lo3:g}° ≤ α3 ≤ {hi3:g}° (double cranks only), found by the design-to-targets "
+            "search of `linkwright.synthesis.targets` "
+            f"(grid {search['grid'][0]}×{search['grid'][1]}, "
+            f"{search['evaluated']} mechanisms evaluated, {search['seeds']} Newton seeds). "
+            "The square holds both readings of the crank arc: with the crank read as 100° the "
+            "same mechanism has α2′ = 180° − α2. Sensitivity: degrees of α2 or α3 per unit "
+            "change of a target.",
+            "",
+            "| α2 (crank 80°) | α2′ (crank 100°) | α3 | max\\|Kε\\| | max\\|Kp\\| | "
+            "max\\|Kω\\| | δ | condition | dα2/dKε | dα2/dKp | dα3/dKε | dα3/dKp |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        for sol in synthesis["solutions"]:
+            sens = sol["sensitivity"]
+            lines.append(
+                f"| {sol['alpha2']:.4f} | {sol['alpha2_read_100']:.4f} | {sol['alpha3']:.4f} | "
+                f"{sol['K_epsilon']:.6f} | {sol['K_p']:.6f} | {sol['K_omega']:.4f} | "
+                f"{sol['delta']:.4f} | {sol['condition']:.1f} | "
+                + " | ".join(
+                    f"{sens[a][t]:.1f}" for a in ("alpha2", "alpha3") for t in ("K_epsilon", "K_p")
+                )
+                + " |"
+            )
+        lines += [
+            "",
+            "The solutions are one mechanism: flipping the axis B (α2, α3 → 180° − α2, "
+            "180° − α3) changes no motion, and the 100° reading flips the axis A. Near these "
+            "proportions max|Kε| and max|Kp| have almost parallel level curves, so the design "
+            "problem is ill-conditioned: a change of 0.01 in a target moves α2 by more than "
+            "10°, and the paper's answer meets the targets to 2 % but lies about 10° from the "
+            "exact one.",
             "",
         ]
     return "\n".join(lines) + "\n"
