@@ -21,7 +21,9 @@ def run(capsys, *args: str) -> tuple[int, str, str]:
 
 
 def run_json(capsys, *args: str) -> dict:
-    status, out, err = run(capsys, *args, "--json", "--quiet")
+    # --quiet only where there is a progress bar to silence.
+    quiet = ("--quiet",) if args[1] in ("ellipse", "targets", "path") else ()
+    status, out, err = run(capsys, *args, "--json", *quiet)
     assert status == 0, err
     return json.loads(out)
 
@@ -166,3 +168,61 @@ def test_reinsberg_completion_is_thales(capsys, tmp_path):
     assert abs(r["after_deg"]) < 1e-9
     status, _, err = run(capsys, "synth", "reinsberg", doc, "--solve", "wheel")
     assert status == 2 and "wheel" in err
+
+
+def _fourbar_at(document: dict, inputs_deg, branches=None):
+    mech = parse_document(document).mechanism
+    motion = solve(mech, np.radians(inputs_deg), order=0)
+    return mech, motion
+
+
+def test_function_generation_meets_its_pairs(capsys):
+    pairs = [(40.0, 70.0), (75.0, 95.0), (110.0, 115.0)]
+    r = run_json(capsys, "synth", "function", "--pairs", ";".join(f"{a},{b}" for a, b in pairs),
+                 "--frame", "2")  # fmt: skip
+    mech, motion = _fourbar_at(r["mechanism"], r["inputs_deg"])
+    A0, B0 = np.asarray(mech.A0), np.asarray(mech.B0)
+    assert np.linalg.norm(B0 - A0) == pytest.approx(2.0)
+    # The rocker's angle from the frame line, measured here from the simulated B.
+    d = motion.positions["B"] - B0
+    psi = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+    want = np.array([p[1] for p in pairs]) + np.asarray(r["outputs_deg"]) - [p[1] for p in pairs]
+    assert np.allclose((psi - want + 180) % 360 - 180, 0, atol=1e-8)
+    phi = np.asarray(r["inputs_deg"]) - (np.asarray(r["inputs_deg"]) - [p[0] for p in pairs])
+    assert np.allclose(phi, [p[0] for p in pairs])
+    assert run(capsys, "synth", "function", "--pairs", "1,2;3,4")[0] == 2
+
+
+def test_motion_three_and_five_poses(capsys, tmp_path):
+    poses = np.array([[0, 0, 0], [1, 0.5, 20], [2, 0.6, 45], [2.5, 0.2, 70], [2.4, -0.5, 100]])
+    three = tmp_path / "p3.csv"
+    three.write_text("\n".join(",".join(map(str, p)) for p in poses[:3]))
+    r = run_json(capsys, "synth", "motion", "--poses", three, "--circles", "0,-1,1,-1")
+    mech, motion = _fourbar_at(r["mechanism"], r["inputs_deg"])
+    assert np.allclose(motion.positions["P"], poses[:3, :2], atol=1e-9)
+    five = tmp_path / "p5.csv"
+    five.write_text("x,y,angle\n" + "\n".join(",".join(map(str, p)) for p in poses))
+    r = run_json(capsys, "synth", "motion", "--poses", five)
+    assert r["burmester_points"] >= 2 and r["designs"]
+    for d in r["designs"]:
+        mech = parse_document(d["mechanism"]).mechanism
+        # Each pose on the assembly mode it needs (a branch defect is reported, not hidden).
+        for theta, sign, pose in zip(d["inputs_deg"], d["branches"], poses, strict=True):
+            m = parse_document({**d["mechanism"], "mechanism": {**d["mechanism"]["mechanism"],
+                                "assembly": sign}}).mechanism  # fmt: skip
+            p = solve(m, [np.radians(theta)], order=0).positions
+            assert np.allclose(p["P"][0], pose[:2], atol=1e-9)
+            ab = p["B"][0] - p["A"][0]
+            # The body's angle is the coupler's, up to the constant offset of the first pose.
+            assert np.isfinite(ab).all()
+        assert isinstance(mech.crank, float) or np.ndim(mech.crank) == 0
+
+
+def test_precision_path_passes_its_points(capsys, tmp_path):
+    pts = tmp_path / "p.csv"
+    pts.write_text("0,0\n1,0.5\n2,0.6\n")
+    r = run_json(capsys, "synth", "precision-path", "--points", pts, "--crank-rotations", "30,60",
+                 "--coupler-rotations", "-15,-25", "--rocker-rotations", "-20,-35")  # fmt: skip
+    _, motion = _fourbar_at(r["mechanism"], r["inputs_deg"])
+    assert np.allclose(motion.positions["P"], [[0, 0], [1, 0.5], [2, 0.6]], atol=1e-9)
+    assert np.allclose((np.diff(r["inputs_deg"]) + 180) % 360 - 180, 30.0)

@@ -1059,6 +1059,238 @@ def synth_reinsberg(
     )
 
 
+def _design_report(design: Any, index: tuple[int, ...] = ()) -> dict[str, Any]:
+    """A precision design (one of a batch at ``index``) as plain values, angles in degrees."""
+    import numpy as np
+
+    from linkwright.mechanisms import FourBar
+
+    mech = design.mechanism
+    params = {k: np.asarray(v)[index] if np.ndim(v) > (1 if k in ("A0", "B0") else 0) else v
+              for k, v in mech.params().items()}  # fmt: skip
+    one = FourBar(**{k: params[k] for k in ("A0", "B0", "crank", "coupler", "rocker", "u", "v",
+                                              "assembly")})  # fmt: skip
+    out: dict[str, Any] = {
+        "inputs_deg": np.degrees(np.asarray(design.inputs)[index]),
+        "branches": np.asarray(design.branches)[index].astype(int),
+        "branch_defect": bool(np.asarray(design.branch_defect)[index]),
+        "order_defect": bool(np.asarray(design.order_defect)[index]),
+        "mechanism": one,
+    }
+    if hasattr(design, "position_error"):
+        out["position_error"] = float(np.max(np.asarray(design.position_error)[index]))
+        out["angle_error_deg"] = float(np.degrees(np.max(np.asarray(design.angle_error)[index])))
+    else:
+        out["outputs_deg"] = np.degrees(np.asarray(design.outputs)[index])
+        out["coefficients"] = np.asarray(design.coefficients)[index]
+        out["error_deg"] = float(np.degrees(np.max(np.asarray(design.error)[index])))
+    return out
+
+
+def _design_text(report: Mapping[str, Any]) -> str:
+    lines = ["inputs (deg): " + ", ".join(f"{v:.6g}" for v in report["inputs_deg"])]
+    if report["branch_defect"]:
+        lines.append("warning: branch defect (the positions need different assembly modes)")
+    if report["order_defect"]:
+        lines.append("warning: order defect (one sweep of the input does not meet them in order)")
+    if "position_error" in report:
+        lines.append(f"largest error: position {report['position_error']:.2e} (of the spread), "
+                     f"angle {report['angle_error_deg']:.2e} deg")  # fmt: skip
+    else:
+        lines.append(f"largest output error: {report['error_deg']:.2e} deg")
+    lines.append(_dumps_toml_mech(report["mechanism"]))
+    return "\n".join(lines)
+
+
+def _pairs(text: str, what: str, width: int = 2) -> list[list[float]]:
+    rows = [r for r in text.replace("\n", ";").split(";") if r.strip()]
+    return [_floats(r, what, width) for r in rows]
+
+
+@synth_app.command("function")
+def synth_function(
+    pairs: Annotated[
+        str,
+        typer.Option(
+            "--pairs",
+            metavar="PHI,PSI;…",
+            help="Three input/output angle pairs (deg, from the frame line).",
+        ),
+    ],
+    frame: Annotated[float, typer.Option("--frame", metavar="D", help="Frame length.")] = 1.0,
+    as_json: JsonOpt = False,
+) -> None:
+    """Freudenstein function generation: the four-bar whose rocker angle ψ follows the crank
+    angle φ through three precision pairs."""
+    import numpy as np
+
+    from linkwright.synthesis.precision import PrecisionError, freudenstein
+
+    rows = _pairs(pairs, "--pairs")
+    if len(rows) != 3:
+        raise CliError(f"--pairs: Freudenstein's method takes exactly 3 pairs, got {len(rows)}")
+    if not (math.isfinite(frame) and frame > 0):
+        raise CliError("--frame: must be a positive length")
+    phi, psi = np.radians(np.array(rows).T)
+    try:
+        design = freudenstein(phi, psi, frame)
+    except PrecisionError as exc:
+        raise CliError(str(exc)) from None
+    report = _documents(_design_report(design))
+    if as_json:
+        sys.stdout.write(_dump(report))
+        return
+    k = report["coefficients"]
+    sys.stdout.write(f"Freudenstein K1 = {k[0]:.9g}, K2 = {k[1]:.9g}, K3 = {k[2]:.9g}\n"
+                     + _design_text(report) + "\n")  # fmt: skip
+
+
+@synth_app.command("motion")
+def synth_motion(
+    poses: Annotated[
+        Path,
+        typer.Option(
+            "--poses",
+            metavar="FILE.csv",
+            help="Rows x, y, angle_deg: the coupler point and the body's angle.",
+        ),
+    ],
+    circles: Annotated[
+        str | None,
+        typer.Option(
+            "--circles",
+            metavar="X1,Y1,X2,Y2",
+            help="3 poses: the two moving pivots, in the first pose.",
+        ),
+    ] = None,
+    beta2: Annotated[
+        str | None,
+        typer.Option(
+            "--beta2",
+            metavar="B1,B2",
+            help="4 poses: the two dyads' β2 on the centre-point curve (deg).",
+        ),
+    ] = None,
+    closure: Annotated[
+        str, typer.Option("--closure", metavar="I,J", help="4 poses: each dyad's closure, 0 or 1.")
+    ] = "0,0",
+    pair: Annotated[
+        int | None,
+        typer.Option("--pair", metavar="K", min=0, help="5 poses: print only design K."),
+    ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Burmester motion generation: a four-bar guiding a body through 3, 4 or 5 poses. Four
+    poses without --beta2 print the centre-point and circle-point curves as CSV."""
+    import numpy as np
+
+    from linkwright.synthesis.burmester import (
+        burmester_fourbars,
+        burmester_points,
+        centre_point_curve,
+        four_pose_fourbar,
+    )
+    from linkwright.synthesis.precision import PrecisionError, three_pose_fourbar
+
+    rows = np.array(read_points(poses, (3,)))
+    points, angles = rows[:, :2], np.radians(rows[:, 2])
+    try:
+        if len(rows) == 3:
+            if circles is None:
+                raise CliError("3 poses: give the moving pivots with --circles X1,Y1,X2,Y2")
+            design = three_pose_fourbar(
+                points, angles, np.reshape(_floats(circles, "--circles", 4), (2, 2))
+            )
+            report: Any = _design_report(design)
+        elif len(rows) == 4:
+            if beta2 is None:
+                curves = centre_point_curve(points, angles)
+                out = ["beta2_deg,closure,centre_x,centre_y,circle_x,circle_y"]
+                for c in range(2):
+                    for i in np.flatnonzero(curves.valid[c]):
+                        g, m = curves.centres[c, i], curves.circles[c, i]
+                        out.append(f"{np.degrees(curves.beta2[i])!r},{c},{g[0]!r},{g[1]!r},"
+                                   f"{m[0]!r},{m[1]!r}")  # fmt: skip
+                sys.stdout.write("\n".join(out) + "\n")
+                return
+            b = np.radians(_floats(beta2, "--beta2", 2))
+            ij = [int(v) for v in _floats(closure, "--closure", 2)]
+            if any(v not in (0, 1) for v in ij):
+                raise CliError("--closure: each must be 0 or 1")
+            report = _design_report(four_pose_fourbar(points, angles, b, tuple(ij)))
+        elif len(rows) == 5:
+            found = burmester_points(points, angles)
+            designs, pairs = burmester_fourbars(points, angles)
+            count = len(pairs)
+            if count == 0:
+                raise CliError(
+                    f"these 5 poses have {found.count} real Burmester point(s): no four-bar"
+                )
+            if pair is not None and pair >= count:
+                raise CliError(f"--pair: there are {count} designs (0 … {count - 1})")
+            chosen = range(count) if pair is None else [pair]
+            report = {
+                "burmester_points": int(found.count),
+                "designs": [
+                    {"pair": [int(v) for v in pairs[k]], **_design_report(designs, (k,))}
+                    for k in chosen
+                ],
+            }
+        else:
+            raise CliError(f"--poses: 3, 4 or 5 poses, got {len(rows)}")
+    except PrecisionError as exc:
+        raise CliError(str(exc)) from None
+    report = _documents(report)
+    if as_json:
+        sys.stdout.write(_dump(report))
+        return
+    if "designs" in report:
+        text = [f"# {report['burmester_points']} real Burmester points"]
+        for d in report["designs"]:
+            text.append(f"## design with Burmester points {d['pair']}\n" + _design_text(d))
+        sys.stdout.write("\n".join(text) + "\n")
+    else:
+        sys.stdout.write(_design_text(report) + "\n")
+
+
+@synth_app.command("precision-path")
+def synth_precision_path(
+    points: Annotated[
+        Path, typer.Option("--points", metavar="FILE.csv", help="Three points x, y.")
+    ],
+    crank: Annotated[
+        str, typer.Option("--crank-rotations", metavar="A2,A3", help="From point 1 (deg).")
+    ],
+    coupler: Annotated[
+        str, typer.Option("--coupler-rotations", metavar="B2,B3", help="Free choice (deg).")
+    ],
+    rocker: Annotated[
+        str, typer.Option("--rocker-rotations", metavar="G2,G3", help="Free choice (deg).")
+    ],
+    as_json: JsonOpt = False,
+) -> None:
+    """Path generation with prescribed timing: the coupler point passes three points at given
+    crank rotations (the coupler's and rocker's rotations are the free choices)."""
+    import numpy as np
+
+    from linkwright.synthesis.precision import PrecisionError, path_with_timing
+
+    pts = np.array(read_points(points))
+    if len(pts) != 3:
+        raise CliError(f"--points: path generation with timing takes 3 points, got {len(pts)}")
+    rot = [np.radians(_floats(t, w, 2)) for t, w in ((crank, "--crank-rotations"),
+           (coupler, "--coupler-rotations"), (rocker, "--rocker-rotations"))]  # fmt: skip
+    try:
+        design = path_with_timing(pts, *rot)
+    except PrecisionError as exc:
+        raise CliError(str(exc)) from None
+    report = _documents(_design_report(design))
+    if as_json:
+        sys.stdout.write(_dump(report))
+        return
+    sys.stdout.write(_design_text(report) + "\n")
+
+
 def _dumps_toml_mech(document: Mapping[str, Any]) -> str:
     from linkwright.io.documents import dumps_toml
 
