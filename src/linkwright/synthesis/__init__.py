@@ -6,3 +6,93 @@ Each route lives in its own module and returns mechanisms (immutable values of
 printing them is the job of the layers above (``io`` and the command line). Long searches take
 an optional ``progress`` callable, called with the fraction done in [0, 1].
 """
+
+from linkwright.synthesis.burmester import (
+    BurmesterCurves,
+    BurmesterPoints,
+    burmester_fourbars,
+    burmester_points,
+    centre_point_curve,
+    four_pose_dyads,
+    four_pose_fourbar,
+)
+from linkwright.synthesis.ellipse import (
+    EllipseError,
+    EllipseFit,
+    check_on_ellipse,
+    doubleslider_family,
+    doubleslider_from_ellipse,
+    ellipse_synthesis,
+    family_angles,
+    fit_ellipse,
+    trammel_from_conic,
+)
+from linkwright.synthesis.ellipse import Trammel as EllipseTrammel
+from linkwright.synthesis.precision import (
+    FunctionDesign,
+    MotionDesign,
+    PrecisionError,
+    chebyshev_spacing,
+    fourbar_from_dyads,
+    freudenstein,
+    function_error,
+    function_pairs,
+    path_with_timing,
+    pose_positions,
+    three_pose_fourbar,
+)
+from linkwright.synthesis.reinsberg import (
+    ReinsbergError,
+    reinsberg_complete,
+    reinsberg_defect,
+    reinsberg_mechanism,
+)
+from linkwright.synthesis.targets import (
+    OUTPUTS,
+    TargetError,
+    TargetSolution,
+    TargetSolutions,
+    design_fourbar,
+    design_to_targets,
+)
+
+__all__ = [
+    "OUTPUTS",
+    "BurmesterCurves",
+    "BurmesterPoints",
+    "EllipseError",
+    "EllipseFit",
+    "EllipseTrammel",
+    "FunctionDesign",
+    "MotionDesign",
+    "PrecisionError",
+    "ReinsbergError",
+    "TargetError",
+    "TargetSolution",
+    "TargetSolutions",
+    "burmester_fourbars",
+    "burmester_points",
+    "centre_point_curve",
+    "chebyshev_spacing",
+    "check_on_ellipse",
+    "design_fourbar",
+    "design_to_targets",
+    "doubleslider_family",
+    "doubleslider_from_ellipse",
+    "ellipse_synthesis",
+    "family_angles",
+    "fit_ellipse",
+    "four_pose_dyads",
+    "four_pose_fourbar",
+    "fourbar_from_dyads",
+    "freudenstein",
+    "function_error",
+    "function_pairs",
+    "path_with_timing",
+    "pose_positions",
+    "reinsberg_complete",
+    "reinsberg_defect",
+    "reinsberg_mechanism",
+    "three_pose_fourbar",
+    "trammel_from_conic",
+]
