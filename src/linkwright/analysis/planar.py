@@ -27,6 +27,7 @@ from linkwright.mechanisms import FourBar, SliderCrank, SphericalFourBar, circui
 from linkwright.mechanisms.base import Mechanism
 
 __all__ = [
+    "FOURBAR_CLASSES",
     "coefficients",
     "fourbar_class",
     "grashof",
@@ -43,6 +44,16 @@ Array = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
 # Lengths equal to this relative tolerance count as equal when classifying (s + l = p + q).
 CLASS_TOL = 1e-12
+
+# Every name fourbar_class can give, planar and spherical.
+FOURBAR_CLASSES = (
+    "change-point",
+    "crank-rocker",
+    "double-crank",
+    "double-rocker",
+    "rocker-crank",
+    "triple-rocker",
+)
 
 
 def _lengths(fb: FourBar) -> tuple[Array, Array, Array, Array]:

@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from linkwright.analysis import fourbar_class, input_limits, transmission_extremes
+from linkwright.analysis.planar import FOURBAR_CLASSES
 from linkwright.mechanisms import FourBar, SphericalFourBar, input_range
 from linkwright.mechanisms.base import Mechanism
 
@@ -161,14 +162,7 @@ def reinsberg_complete(
     fb = _check(fb)
     if field not in DIMENSIONS:
         raise ReinsbergError(f"field: {field!r} is not a link of a four-bar; one of {DIMENSIONS}")
-    classes = (
-        "change-point",
-        "crank-rocker",
-        "double-crank",
-        "double-rocker",
-        "rocker-crank",
-        "triple-rocker",
-    )
+    classes = FOURBAR_CLASSES
     if kind is not None and kind not in classes:
         raise ReinsbergError(f"kind: unknown class {kind!r}; one of {', '.join(classes)}")
     d = _dims(fb)

@@ -51,6 +51,7 @@ from linkwright.analysis import (
     output_extremes,
     transmission_extremes,
 )
+from linkwright.analysis.planar import FOURBAR_CLASSES
 from linkwright.mechanisms import FourBar, SphericalFourBar, input_range
 from linkwright.mechanisms.base import Mechanism
 
@@ -989,14 +990,7 @@ def design_fourbar(
     bad = [n for n in targets if n not in OUTPUTS]
     if bad:
         raise TargetError(f"unknown output {bad[0]!r}; one of {', '.join(OUTPUTS)}")
-    classes = (
-        "change-point",
-        "crank-rocker",
-        "double-crank",
-        "double-rocker",
-        "rocker-crank",
-        "triple-rocker",
-    )
+    classes = FOURBAR_CLASSES
     if kind is not None and kind not in classes:
         raise TargetError(f"kind: unknown class {kind!r}; one of {', '.join(classes)}")
 
