@@ -226,3 +226,26 @@ def test_precision_path_passes_its_points(capsys, tmp_path):
     _, motion = _fourbar_at(r["mechanism"], r["inputs_deg"])
     assert np.allclose(motion.positions["P"], [[0, 0], [1, 0.5], [2, 0.6]], atol=1e-9)
     assert np.allclose((np.diff(r["inputs_deg"]) + 180) % 360 - 180, 30.0)
+
+
+def test_path_synthesis_round_trip(capsys, tmp_path):
+    """Points of a known four-bar at known crank angles: the fitted document, simulated here at
+    the inputs it reports, passes through them."""
+    from linkwright.mechanisms import FourBar
+
+    known = FourBar(A0=[0, 0], B0=[3, 0.5], crank=1, coupler=3, rocker=2.5, u=1.5, v=1.0)
+    theta = np.radians([0, 40, 80, 120, 160])
+    pts = solve(known, theta, order=0).positions["P"]
+    f = tmp_path / "pts.csv"
+    f.write_text("\n".join(f"{float(x)!r},{float(y)!r}" for x, y in pts))
+    frame = np.degrees(np.arctan2(0.5, 3))
+    r = run_json(capsys, "synth", "path", "--family", "fourbar", "--points", f, "--angles",
+                 ",".join(f"{float(a - frame)!r}" for a in np.degrees(theta)), "--budget", "8",
+                 "--seed", "3")  # fmt: skip
+    mech = parse_document(r["mechanism"]).mechanism
+    got = solve(mech, np.radians(r["inputs_deg"]), order=0).positions["P"]
+    assert np.sqrt(np.mean(np.sum((got - pts) ** 2, -1))) == pytest.approx(r["rms"], abs=1e-9)
+    assert r["rms"] < 1e-6 * 4
+    status, _, err = run(capsys, "synth", "path", "--family", "fourbar", "--points", f,
+                         "--angles", "1,2", "--free-timing")  # fmt: skip
+    assert status == 2 and "at most one" in err

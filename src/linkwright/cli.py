@@ -81,12 +81,14 @@ def _root(
 
 
 def _decimal(text: str, what: str) -> Decimal:
+    # ``what`` names an option (``--angles``) or a part of --input's range (``START``).
+    where = f"{what}:" if what.startswith("--") else f"--input: {what}"
     try:
         value = Decimal(text.strip())
     except InvalidOperation:
-        raise CliError(f"--input: {what} must be a number, got {text.strip()!r}") from None
+        raise CliError(f"{where} must be a number, got {text.strip()!r}") from None
     if not value.is_finite() or not math.isfinite(float(value)):
-        raise CliError(f"--input: {what} must be a finite number, got {text.strip()!r}")
+        raise CliError(f"{where} must be a finite number, got {text.strip()!r}")
     return value
 
 
@@ -1289,6 +1291,135 @@ def synth_precision_path(
         sys.stdout.write(_dump(report))
         return
     sys.stdout.write(_design_text(report) + "\n")
+
+
+@synth_app.command("path")
+def synth_path(
+    family: Annotated[
+        str,
+        typer.Option(
+            "--family",
+            metavar="F",
+            help="fourbar, slidercrank, geared-fivebar or spherical-fourbar.",
+        ),
+    ],
+    points: Annotated[
+        Path,
+        typer.Option(
+            "--points",
+            metavar="FILE.csv",
+            help="Target points: rows x, y (x, y, z unit vectors on the sphere).",
+        ),
+    ],
+    angles: Annotated[
+        str | None,
+        typer.Option(
+            "--angles",
+            metavar="LIST",
+            help="Crank angles (deg, from the frame line) at each point.",
+        ),
+    ] = None,
+    free_timing: Annotated[
+        bool, typer.Option("--free-timing", help="Unknown but monotonic input angles.")
+    ] = False,
+    no_timing: Annotated[
+        bool, typer.Option("--no-timing", help="Nearest-point fit: no input angles at all.")
+    ] = False,
+    closed: Annotated[
+        bool, typer.Option("--closed", help="The points lie on a closed curve.")
+    ] = False,
+    bound: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--bound",
+            metavar="NAME=LOW:HIGH",
+            help="Search bounds (lengths; arcs and angles in degrees).",
+        ),
+    ] = None,
+    kind: Annotated[
+        list[str] | None,
+        typer.Option("--kind", metavar="CLASS", help="Allowed class(es), e.g. crank-rocker."),
+    ] = None,
+    full_turn: Annotated[
+        bool, typer.Option("--full-turn", help="The input must turn fully.")
+    ] = False,
+    min_transmission: Annotated[
+        float,
+        typer.Option(
+            "--min-transmission",
+            metavar="DEG",
+            min=0.0,
+            max=90.0,
+            help="Least transmission angle over the circuit.",
+        ),
+    ] = 0.0,
+    seed: Annotated[int, typer.Option("--seed", metavar="N", min=0)] = 0,
+    budget: Annotated[
+        float, typer.Option("--budget", metavar="SECONDS", min=0.1, max=86_400.0)
+    ] = 10.0,
+    as_json: JsonOpt = False,
+    quiet: QuietOpt = False,
+) -> None:
+    """Path synthesis by optimisation: a global search over batched populations, then local
+    least squares. Prints the error (sum of squared distances), the RMS and the mechanism."""
+    import numpy as np
+
+    from linkwright.synthesis.path import PathSynthesisError, fit_path
+
+    if sum((angles is not None, free_timing, no_timing)) > 1:
+        raise CliError("give at most one of --angles, --free-timing and --no-timing")
+    timing = "prescribed" if angles is not None else "none" if no_timing else "free"
+    pts = np.array(read_points(points, (2, 3)))
+    given = np.radians(_floats(angles, "--angles")) if angles is not None else None
+    bounds: dict[str, tuple[float, float]] = {}
+    for name, text in _assignments(bound or [], "--bound").items():
+        low, sep, high = text.partition(":")
+        if not sep:
+            raise CliError(f"--bound {name}: expected LOW:HIGH, got {text!r}")
+        lo, hi = float(_decimal(low, "--bound")), float(_decimal(high, "--bound"))
+        if name in ANGLE_BOUNDS or family == "spherical-fourbar":  # on the sphere: all angles
+            lo, hi = math.radians(lo), math.radians(hi)
+        bounds[name] = (lo, hi)
+    constraints = {
+        "classes": tuple(kind or ()),
+        "full_turn": full_turn,
+        "min_transmission": math.radians(min_transmission),
+    }
+    try:
+        with _Progress("searching", quiet) as progress:
+            fit = fit_path(
+                family, pts, angles=given, timing=timing, closed=closed, bounds=bounds or None,
+                constraints=constraints, seed=seed, budget=budget, progress=progress,
+            )  # fmt: skip
+    except PathSynthesisError as exc:
+        raise CliError(str(exc)) from None
+    result = _documents({
+        "error": fit.error,
+        "rms": fit.rms,
+        "mechanism": fit.mechanism,
+        "inputs_deg": np.degrees(fit.inputs),
+        "angles_deg": np.degrees(fit.angles),
+        "distances": fit.distances,
+        "seconds": fit.elapsed,
+        "evaluations": fit.evaluations,
+        "stopped": fit.stopped,
+    })  # fmt: skip
+    if as_json:
+        sys.stdout.write(_dump(result))
+        return
+    sys.stdout.write(
+        f"error {fit.error:.6g} (sum of squared distances), RMS {fit.rms:.6g}; "
+        f"{fit.evaluations} linkages in {fit.elapsed:.1f} s, stopped at the {fit.stopped}\n"
+        + "inputs (deg): "
+        + ", ".join(f"{v:.6g}" for v in result["inputs_deg"])
+        + "\n"
+        + _dumps_toml_mech(result["mechanism"])
+        + "\n"
+    )
+
+
+# Path-synthesis bounds given in degrees on the command line.
+ANGLE_BOUNDS = frozenset({"frame_angle", "gear_phase", "point_angle"})
 
 
 def _dumps_toml_mech(document: Mapping[str, Any]) -> str:

@@ -28,6 +28,13 @@ from linkwright.synthesis.ellipse import (
     trammel_from_conic,
 )
 from linkwright.synthesis.ellipse import Trammel as EllipseTrammel
+from linkwright.synthesis.path import (
+    NoFeasibleLinkage,
+    PathConstraints,
+    PathFit,
+    PathSynthesisError,
+    fit_path,
+)
 from linkwright.synthesis.precision import (
     FunctionDesign,
     MotionDesign,
@@ -65,6 +72,10 @@ __all__ = [
     "EllipseTrammel",
     "FunctionDesign",
     "MotionDesign",
+    "NoFeasibleLinkage",
+    "PathConstraints",
+    "PathFit",
+    "PathSynthesisError",
     "PrecisionError",
     "ReinsbergError",
     "TargetError",
@@ -82,6 +93,7 @@ __all__ = [
     "ellipse_synthesis",
     "family_angles",
     "fit_ellipse",
+    "fit_path",
     "four_pose_dyads",
     "four_pose_fourbar",
     "fourbar_from_dyads",
