@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from numpy.polynomial import chebyshev
 from scipy.optimize import fsolve
@@ -222,7 +222,7 @@ def closed_form_psi(a, b, c, d, phi, branch):
     return math.atan2(B[1], B[0] - d)
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
 @given(
     a=length,
     b=length,
