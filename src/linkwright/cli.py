@@ -919,6 +919,17 @@ def _assignments(items: Sequence[str], what: str) -> dict[str, str]:
     return out
 
 
+def _bounds(items: Sequence[str]) -> dict[str, tuple[float, float]]:
+    """``--bound NAME=LOW:HIGH`` items as {name: (low, high)}, in the units given."""
+    bounds: dict[str, tuple[float, float]] = {}
+    for name, text in _assignments(items, "--bound").items():
+        low, sep, high = text.partition(":")
+        if not sep:
+            raise CliError(f"--bound {name}: expected LOW:HIGH, got {text!r}")
+        bounds[name] = (float(_decimal(low, "--bound")), float(_decimal(high, "--bound")))
+    return bounds
+
+
 @synth_app.command("targets")
 def synth_targets(
     family: Annotated[
@@ -969,12 +980,7 @@ def synth_targets(
     goals = {
         k: float(_decimal(v, f"--target {k}")) for k, v in _assignments(target, "--target").items()
     }
-    bounds: dict[str, tuple[float, float]] = {}
-    for name, text in _assignments(bound or [], "--bound").items():
-        low, sep, high = text.partition(":")
-        if not sep:
-            raise CliError(f"--bound {name}: expected LOW:HIGH, got {text!r}")
-        bounds[name] = (float(_decimal(low, "--bound")), float(_decimal(high, "--bound")))
+    bounds = _bounds(bound or [])
     names = [n.strip() for n in free.split(",") if n.strip()]
     try:
         with _Progress("searching", quiet) as progress:
@@ -1371,15 +1377,12 @@ def synth_path(
     timing = "prescribed" if angles is not None else "none" if no_timing else "free"
     pts = np.array(read_points(points, (2, 3)))
     given = np.radians(_floats(angles, "--angles")) if angles is not None else None
-    bounds: dict[str, tuple[float, float]] = {}
-    for name, text in _assignments(bound or [], "--bound").items():
-        low, sep, high = text.partition(":")
-        if not sep:
-            raise CliError(f"--bound {name}: expected LOW:HIGH, got {text!r}")
-        lo, hi = float(_decimal(low, "--bound")), float(_decimal(high, "--bound"))
-        if name in ANGLE_BOUNDS or family == "spherical-fourbar":  # on the sphere: all angles
-            lo, hi = math.radians(lo), math.radians(hi)
-        bounds[name] = (lo, hi)
+    bounds = {
+        name: (math.radians(lo), math.radians(hi))
+        if name in ANGLE_BOUNDS or family == "spherical-fourbar"  # on the sphere: all angles
+        else (lo, hi)
+        for name, (lo, hi) in _bounds(bound or []).items()
+    }
     constraints = {
         "classes": tuple(kind or ()),
         "full_turn": full_turn,

@@ -45,7 +45,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine.kernels import compiled
+from linkwright.engine.kernels import available, compiled
 
 __all__ = [
     "CurveError",
@@ -368,8 +368,6 @@ def descriptors(
     >>> bool(np.isnan(descriptors([[0, 0], [1, 0], [np.nan, 1]])).all())
     True
     """
-    from linkwright.engine.kernels import available
-
     p = _as_curves(points)
     if harmonics < 1:
         raise CurveError(f"harmonics: must be at least 1, got {harmonics}")
