@@ -32,6 +32,7 @@ $(BENCH_STAMP): $(STAMP)
 bench: $(BENCH_STAMP)
 	$(BIN)/python bench/run.py
 	$(BIN)/python bench/synthesis.py
+	$(BIN)/python bench/atlas.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -8,7 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from linkwright.curves import CurveError, aligned_error, descriptor_variants, descriptors, resample
+from linkwright.curves import (
+    CurveError,
+    align,
+    aligned_error,
+    descriptor_variants,
+    descriptors,
+    resample,
+)
 from linkwright.curves.fourier import _descriptors_reference
 from linkwright.mechanisms import FourBar, solve
 
@@ -150,3 +157,97 @@ def test_bad_curves_are_named():
         descriptors(np.eye(3, 2), harmonics=0)
     with pytest.raises(CurveError, match="samples"):
         resample(np.eye(3, 2), 2)
+
+
+def _vertex_fraction(curve: np.ndarray, index: int) -> float:
+    """Where vertex ``index`` lies along the closed polygon, as a fraction of its length."""
+    seg = np.linalg.norm(np.roll(curve, -1, axis=0) - curve, axis=-1)
+    return float(np.sum(seg[:index]) / np.sum(seg))
+
+
+def _circular_gap(a: float, b: float) -> float:
+    return abs((a - b + 0.5) % 1.0 - 0.5)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    angle=st.floats(-3.0, 3.0),
+    scale=st.floats(1e-2, 1e2),
+    shift=st.tuples(st.floats(-1e2, 1e2), st.floats(-1e2, 1e2)),
+    roll=st.integers(0, 89),
+    backwards=st.booleans(),
+)
+def test_align_recovers_the_transform(seed, angle, scale, shift, roll, backwards):
+    curve = _coupler_curves(np.random.default_rng(seed), 1)[0]
+    target = _moved(curve, angle, scale, shift, roll, backwards)
+    fit = align(curve, target)
+    size = np.sqrt(np.mean(np.sum((curve - curve.mean(0)) ** 2, -1)))  # RMS radius
+    # The target starts at the curve's vertex 89 − ((−roll) mod 90) backwards, −roll forwards.
+    start = (-roll) % 90
+    start = 89 - start if backwards else start
+    assert bool(fit.reversed) is backwards
+    # Only the resampling's offset remains: the curves' corners make it up to ~1e-3 of the size.
+    assert _circular_gap(float(fit.shift), _vertex_fraction(curve, start)) < 1e-4
+    assert fit.scale == pytest.approx(scale, rel=5e-4)
+    assert abs((fit.rotation - angle + np.pi) % (2 * np.pi) - np.pi) < 5e-4
+    reach = scale * (size + np.linalg.norm(curve.mean(0)))  # w's error, carried to the origin
+    np.testing.assert_allclose(fit.translation, shift, atol=5e-4 * reach)
+    assert fit.rms < 3e-3 * scale * size
+    assert fit.error == pytest.approx(aligned_error(curve, target), abs=1e-15)
+
+
+def _start_at(curve: np.ndarray, fraction: float, backwards: bool) -> np.ndarray:
+    """The same closed polygon, starting at ``fraction`` of its length (along its own
+    direction) and run backwards if asked."""
+    nxt = np.roll(curve, -1, axis=0)
+    seg = np.linalg.norm(nxt - curve, axis=-1)
+    cum = np.concatenate([[0.0], np.cumsum(seg)]) / seg.sum()
+    j = min(np.searchsorted(cum, fraction, "right") - 1, len(curve) - 1)
+    point = curve[j] + (fraction - cum[j]) / (cum[j + 1] - cum[j]) * (nxt[j] - curve[j])
+    if backwards:
+        return np.concatenate([[point], curve[j::-1], curve[:j:-1]])
+    return np.concatenate([[point], curve[j + 1 :], curve[: j + 1]])
+
+
+def _to_polyline(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """Distance from each point to the closed polygon (brute force over every side)."""
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    ab = b - a
+    t = np.sum((points[:, None] - a) * ab, -1) / np.sum(ab * ab, -1)
+    foot = a + np.clip(t, 0, 1)[..., None] * ab
+    return np.min(np.linalg.norm(points[:, None] - foot, axis=-1), axis=1)
+
+
+def test_align_fields_mean_what_they_say():
+    """Two different coupler curves: the transform, applied to the curve started at ``shift``
+    in its direction, lies on the target with the reported RMS; the distance to the target's
+    polygon is never more and of the same size."""
+    rng = np.random.default_rng(6)
+    a, b = _coupler_curves(rng, 2)
+    b = _moved(b, 2.0, 3.0, (1.0, -4.0), 40, True)
+    fit = align(a, b)
+    c, s = np.cos(fit.rotation), np.sin(fit.rotation)
+    started = resample(_start_at(a, fit.shift, fit.reversed), 256)
+    moved = fit.scale * started @ np.array([[c, s], [-s, c]]) + fit.translation
+    samples = resample(b, 256)
+    direct = np.sqrt(np.mean(np.sum((moved - samples) ** 2, -1)))
+    assert direct == pytest.approx(fit.rms, rel=2e-3)  # to the interpolation's O(1/256²)
+    radius = np.sqrt(np.mean(np.sum((samples - samples.mean(0)) ** 2, -1)))
+    assert fit.error == pytest.approx(fit.rms / radius, rel=1e-12)
+    near = np.sqrt(np.mean(_to_polyline(moved, b) ** 2))
+    assert 0.9 * fit.rms < near <= fit.rms * (1 + 1e-3)
+
+
+def test_align_batches_and_nan():
+    rng = np.random.default_rng(7)
+    curves = _coupler_curves(rng, 3)
+    curves[1, 4] = np.nan  # a linkage that does not assemble there
+    fit = align(curves, curves[0])
+    assert fit.error.shape == (3,) and fit.translation.shape == (3, 2)
+    assert fit.error[0] < 1e-12 and fit.scale[0] == pytest.approx(1.0)
+    assert np.isnan([fit.error[1], fit.rms[1], fit.scale[1], fit.rotation[1], fit.shift[1]]).all()
+    assert np.isnan(fit.translation[1]).all() and not fit.reversed[1]
+    assert np.isfinite(fit.error[2]) and fit.error[2] > 0
+    opened = align(curves[0], curves[0][::-1], closed=False)
+    assert opened.reversed and opened.shift == 1 and opened.error < 1e-12

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from linkwright.engine import Plan, evaluate
@@ -725,7 +725,9 @@ def test_batch_circuits_are_closed(cls):
     assert has.mean() > 0.3 and checked.sum() > 0.4 * has.sum()
 
 
-@settings(max_examples=30, deadline=None)
+# Most random six-bars never assemble or are unresolved (checked in the batches above), so the
+# assumption below rejects many draws by design.
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
 @given(drawn=sixbars(batched=True), n=st.integers(8, 300))
 def test_single_circuit_is_closed(drawn, n):
     m, _ = drawn

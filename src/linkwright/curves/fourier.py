@@ -31,7 +31,8 @@ nearest.
 the mean squared distance between the two normalised, band-limited curves, point by point
 (t = 0 … M − 1), at the alignment the normalisation chose. So it ranks candidates as the aligned
 point-to-point error does, and it is never below :func:`aligned_error`, which finds the best
-alignment (similarity transform and start point, either direction) exactly.
+alignment (similarity transform and start point, either direction) exactly; :func:`align` also
+returns that alignment (scale, rotation, translation, direction, start).
 
 Open curves (a user's stroke) are closed by running back along themselves: the doubled curve is
 symmetric, so Z_{−n} = Z_n carries nothing new, the start point is an end (two choices,
@@ -41,6 +42,8 @@ the two variants) and only the rotation is normalised, by Z_1.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -48,7 +51,9 @@ from numpy.typing import ArrayLike, NDArray
 from linkwright.engine.kernels import available, compiled
 
 __all__ = [
+    "Alignment",
     "CurveError",
+    "align",
     "aligned_error",
     "descriptor_variants",
     "descriptors",
@@ -101,35 +106,44 @@ def resample(points: ArrayLike, samples: int = DEFAULT_SAMPLES, closed: bool = T
     array([0., 1., 2., 3., 3.])
     """
     p = _as_curves(points)
-    if samples < 3:
-        raise CurveError(f"samples: need at least 3, got {samples}")
     batch = p.shape[:-2]
     p = p.reshape((-1,) + p.shape[-2:])
     if closed:
         p = np.concatenate([p, p[:, :1]], axis=1)
     seg = np.hypot(*np.moveaxis(np.diff(p, axis=1), -1, 0))
-    cum = np.concatenate([np.zeros((p.shape[0], 1)), np.cumsum(seg, axis=1)], axis=1)
-    total = cum[:, -1:]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        frac = cum / total
-    bad = ~np.isfinite(frac).all(axis=1) | ~(total[:, 0] > 0)
-    frac[bad] = np.linspace(0.0, 1.0, frac.shape[1])  # any monotone fill; masked below
-    steps = samples if closed else samples - 1
-    target = np.arange(samples) / steps
-    rows = np.arange(p.shape[0])[:, None]
-    # One searchsorted for every row at once: row r's fractions are shifted to [2r, 2r + 1].
-    idx = np.searchsorted((frac + 2.0 * rows).ravel(), (target + 2.0 * rows).ravel(), "right")
-    idx = idx.reshape(p.shape[0], samples) - rows * frac.shape[1] - 1
-    idx = np.clip(idx, 0, frac.shape[1] - 2)
-    f0 = np.take_along_axis(frac, idx, axis=1)
-    f1 = np.take_along_axis(frac, idx + 1, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        w = np.where(f1 > f0, (target - f0) / (f1 - f0), 0.0)
+    idx, w, bad = _locate(seg, samples, closed)
     a = np.take_along_axis(p, idx[..., None], axis=1)
     b = np.take_along_axis(p, idx[..., None] + 1, axis=1)
     out = a + w[..., None] * (b - a)
     out[bad] = np.nan
     return out.reshape(batch + (samples, 2))
+
+
+def _locate(seg: Array, samples: int, closed: bool) -> tuple[Array, Array, Array]:
+    """Where ``samples`` points equally spaced by length fall on polylines with segment
+    lengths ``seg`` (C, S): the segment (C, samples), the fraction of it, and which rows have
+    no length (a NaN, or all points equal)."""
+    if samples < 3:
+        raise CurveError(f"samples: need at least 3, got {samples}")
+    count = seg.shape[0]
+    cum = np.concatenate([np.zeros((count, 1)), np.cumsum(seg, axis=1)], axis=1)
+    total = cum[:, -1:]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        frac = cum / total
+    bad = ~np.isfinite(frac).all(axis=1) | ~(total[:, 0] > 0)
+    frac[bad] = np.linspace(0.0, 1.0, frac.shape[1])  # any monotone fill; masked by the caller
+    steps = samples if closed else samples - 1
+    target = np.arange(samples) / steps
+    rows = np.arange(count)[:, None]
+    # One searchsorted for every row at once: row r's fractions are shifted to [2r, 2r + 1].
+    idx = np.searchsorted((frac + 2.0 * rows).ravel(), (target + 2.0 * rows).ravel(), "right")
+    idx = idx.reshape(count, samples) - rows * frac.shape[1] - 1
+    idx = np.clip(idx, 0, frac.shape[1] - 2)
+    f0 = np.take_along_axis(frac, idx, axis=1)
+    f1 = np.take_along_axis(frac, idx + 1, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.where(f1 > f0, (target - f0) / (f1 - f0), 0.0)
+    return idx, w, bad
 
 
 def _fourier(points: ArrayLike, harmonics: int, closed: bool) -> Array:
@@ -162,6 +176,21 @@ def _fourier(points: ArrayLike, harmonics: int, closed: bool) -> Array:
     return out
 
 
+def _closed_phases(pos: Array, neg: Array) -> tuple[Array, Array]:
+    """The rotation φ and start shift σ (…, 4) of the four normalisations of a closed curve's
+    coefficients ``pos`` = Z_1 …, ``neg`` = Z_−1 … (… , K): variants 0, 1 run forwards, 2, 3
+    backwards (Z_n and Z_−n swapped); variant v's Z_k is then multiplied by e^{i(φ_v + k·σ_v)},
+    which makes Z_1 and Z_−1 real and positive (variants 1 and 3 add π to both: the other pair
+    that does)."""
+    phi, shift = [], []
+    for first, minus in ((pos[..., 0], neg[..., 0]), (neg[..., 0], pos[..., 0])):
+        a1, am1 = np.angle(first), np.angle(minus)
+        for extra in (0.0, np.pi):
+            phi.append(-0.5 * (am1 + a1) + extra)
+            shift.append(0.5 * (am1 - a1) + extra)
+    return np.stack(phi, axis=-1), np.stack(shift, axis=-1)
+
+
 def _normalised(coeffs: Array, harmonics: int, closed: bool) -> Array:
     """(…, V, 2K) complex (K for open curves): the harmonics of every variant, start point and
     rotation normalised."""
@@ -177,15 +206,10 @@ def _normalised(coeffs: Array, harmonics: int, closed: bool) -> Array:
     # Both directions: backwards swaps Z_n and Z_{−n}.
     forward = np.concatenate([pos, neg], axis=-1)
     backward = np.concatenate([neg, pos], axis=-1)
-    out = []
-    for z in (forward, backward):
-        a1, am1 = np.angle(z[..., :1]), np.angle(z[..., harmonics : harmonics + 1])
-        s = 0.5 * (am1 - a1)  # start shift (radians of the period)
-        phi = -0.5 * (am1 + a1)  # rotation
-        k = np.concatenate([n, -n])
-        for extra in (0.0, np.pi):
-            out.append(z * np.exp(1j * (phi + extra + k * (s + extra))))
-    return np.stack(out, axis=-2)
+    z = np.stack([forward, forward, backward, backward], axis=-2)
+    phi, shift = _closed_phases(pos, neg)
+    k = np.concatenate([n, -n])
+    return z * np.exp(1j * (phi[..., None] + k * shift[..., None]))
 
 
 def _descriptor_kernel(x, y, harmonics, closed, out):
@@ -392,53 +416,238 @@ def _descriptors_reference(
     """:func:`descriptors` in NumPy, from the variants: the reference the compiled kernel is
     tested against, and the path without numba."""
     v = descriptor_variants(points, closed=closed, harmonics=harmonics)
-    k = harmonics
     if closed:
-        # Direction: |Z_1| ≥ |Z_−1| (variants 0, 1 run forwards, 2, 3 backwards).
-        re = v[..., : 2 * k]
-        forwards = np.abs(re[..., 0, 0]) >= np.abs(re[..., 0, k])
-        pair = np.where(forwards, 0, 2)
-        # Start/rotation pair: the largest even harmonic's larger part (real or imaginary)
-        # positive; the other pair negates every even harmonic.
-        first = np.take_along_axis(v, pair[..., None, None], axis=-2)[..., 0, :]
-        even = np.arange(1, k, 2)  # positions of Z_2, Z_4, … among Z_1 … Z_k
-        slots = np.concatenate([even, k + even])
-        re, im = first[..., slots], first[..., 2 * k + slots]
-        big = np.argmax(re * re + im * im, axis=-1)[..., None]
-        r, i = np.take_along_axis(re, big, -1)[..., 0], np.take_along_axis(im, big, -1)[..., 0]
-        flip = np.where(np.abs(r) >= np.abs(i), r, i) < 0
-        choice = pair + flip
+        choice = _closed_choice(v, harmonics)
     else:
         # Either end first: the one whose Z_2 has the larger real part.
         choice = np.where(v[..., 0, 1] >= v[..., 1, 1], 0, 1)
     return np.take_along_axis(v, choice[..., None, None], axis=-2)[..., 0, :]
 
 
-def _best_correlation(spectrum: Array, steps: int = 40) -> Array:
-    """max over real s of |c(s)|, c(s) = (1/M) Σ_n spectrum_n e^{2πins/M}: the whole shifts by
-    one inverse FFT, then golden section between the best one's neighbours."""
+def _closed_choice(v: Array, k: int) -> Array:
+    """Which of the four closed-curve variants (…, 4, D) is canonical (…,): their first 4K
+    entries are Re Z_1 … Z_K, Re Z_−1 … Z_−K, then the imaginary parts, as
+    :func:`descriptor_variants` lays them out."""
+    # Direction: |Z_1| ≥ |Z_−1| (variants 0, 1 run forwards, 2, 3 backwards).
+    re = v[..., : 2 * k]
+    forwards = np.abs(re[..., 0, 0]) >= np.abs(re[..., 0, k])
+    pair = np.where(forwards, 0, 2)
+    # Start/rotation pair: the largest even harmonic's larger part (real or imaginary)
+    # positive; the other pair negates every even harmonic.
+    first = np.take_along_axis(v, pair[..., None, None], axis=-2)[..., 0, :]
+    if k < 2:
+        return pair
+    even = np.arange(1, k, 2)  # positions of Z_2, Z_4, … among Z_1 … Z_k
+    slots = np.concatenate([even, k + even])
+    re, im = first[..., slots], first[..., 2 * k + slots]
+    big = np.argmax(re * re + im * im, axis=-1)[..., None]
+    r, i = np.take_along_axis(re, big, -1)[..., 0], np.take_along_axis(im, big, -1)[..., 0]
+    flip = np.where(np.abs(r) >= np.abs(i), r, i) < 0
+    return pair + flip
+
+
+def _refine_shift(evaluate: Callable[[Array], tuple[Array, Array]], whole: Array) -> Array:
+    """The shift near ``whole`` (the best whole shift) that maximises a smooth objective, given
+    ``evaluate(shift) -> (objective, slope)``, both batched.
+
+    The slope at ``whole`` says on which side the maximum lies; where the slope changes sign
+    between ``whole`` and the next whole shift that way, its zero is found by regula falsi with
+    the Illinois modification (M. Dowell and P. Jarratt, "A modified regula falsi method for
+    computing the root of an equation", BIT 11, 1971: superlinear, never leaves the bracket).
+    A maximum's flat top pins the shift only to about √ε by values, the slope's steep crossing
+    to rounding. Never worse than ``whole``.
+    """
+    _, g0 = evaluate(whole)
+    step = np.where(g0 > 0, 1.0, -1.0)
+    _, g1 = evaluate(whole + step)
+    # Along t ∈ [0, 1] (shift whole + step·t) the slope G = step·g falls from G(0) > 0 to G(1) < 0.
+    lo, hi = np.zeros_like(whole), np.ones_like(whole)
+    g_lo, g_hi = step * g0, step * g1
+    bracketed = (g_lo > 0) & (g_hi < 0)
+    g_lo, g_hi = np.where(bracketed, g_lo, 1.0), np.where(bracketed, g_hi, -1.0)
+    kept = np.zeros(whole.shape, dtype=int)  # which end stayed last time: −1 lo, +1 hi
+    t = np.zeros_like(whole)
+    for _ in range(40):
+        before = t
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t = (lo * g_hi - hi * g_lo) / (g_hi - g_lo)
+        t = np.where(np.isfinite(t), t, 0.5 * (lo + hi))
+        if not np.any(bracketed & (np.abs(t - before) > 1e-14)):
+            break  # converged everywhere: the rest would only cost time
+        g = step * evaluate(whole + step * t)[1]
+        rising = g > 0  # t replaces lo; hi stays
+        lo, g_lo = np.where(rising, t, lo), np.where(rising, g, g_lo)
+        hi, g_hi = np.where(rising, hi, t), np.where(rising, g_hi, g)
+        # Illinois: an end that stays twice in a row has its slope halved, so the next point
+        # moves towards it instead of creeping from the other side.
+        g_hi = np.where(rising & (kept == 1), 0.5 * g_hi, g_hi)
+        g_lo = np.where(~rising & (kept == -1), 0.5 * g_lo, g_lo)
+        kept = np.where(rising, 1, -1)
+    best = np.where(bracketed, whole + step * t, whole)
+    f_best, f_whole = evaluate(best)[0], evaluate(whole)[0]
+    return np.where(f_best >= f_whole, best, whole)
+
+
+def _correlation(spectrum: Array, shift: Array) -> tuple[Array, Array]:
+    """c(s) = (1/M) Σ_n spectrum_n e^{2πi f_n s/M} (f_n the FFT's frequencies) and dc/ds, the
+    band-limited correlation between samples, for ``spectrum`` (…, C, M) (C correlations
+    sharing a shift) and ``shift`` (…): each (…, C)."""
     m = spectrum.shape[-1]
-    corr = np.abs(np.fft.ifft(spectrum, axis=-1))
-    k = np.argmax(corr, axis=-1).astype(float)
     freq = np.fft.fftfreq(m, 1.0 / m)
+    phase = np.exp(2j * np.pi * freq * shift[..., None] / m)
+    basis = np.stack([phase, phase * (2j * np.pi * freq / m)], axis=-1)  # (…, M, 2)
+    out = spectrum @ basis / m
+    return out[..., 0], out[..., 1]
 
-    def value(shift: Array) -> Array:
-        phase = np.exp(2j * np.pi * freq * shift[..., None] / m)
-        return np.abs(np.sum(spectrum * phase, axis=-1)) / m
 
-    lo, hi = k - 1.0, k + 1.0
-    ratio = (np.sqrt(5.0) - 1.0) / 2.0
-    x1, x2 = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
-    f1, f2 = value(x1), value(x2)
-    for _ in range(steps):
-        left = f1 >= f2  # the maximum lies in [lo, x2]
-        hi = np.where(left, x2, hi)
-        lo = np.where(left, lo, x1)
-        x2n = np.where(left, x1, lo + ratio * (hi - lo))
-        x1n = np.where(left, hi - ratio * (hi - lo), x2)
-        x1, x2 = x1n, x2n
-        f1, f2 = value(x1), value(x2)
-    return np.maximum(np.max(corr, axis=-1), np.maximum(f1, f2))
+def _shifted(x: Array, shift: Array, axis: int) -> Array:
+    """The samples of x(t − shift), band-limited between samples (x complex, or real and then
+    the real part), over the sample axis ``axis`` (negative: counted from the end); ``shift``
+    has the batch shape."""
+    m = x.shape[axis]
+    freq = np.fft.fftfreq(m, 1.0 / m)
+    phase = np.exp(-2j * np.pi * freq * shift[..., None] / m)
+    phase = phase.reshape(phase.shape + (1,) * (-axis - 1))  # axis counts from the end
+    out = np.fft.ifft(np.fft.fft(x, axis=axis) * phase, axis=axis)
+    return out if np.iscomplexobj(x) else out.real
+
+
+def _best_correlation(spectrum: Array) -> tuple[Array, Array]:
+    """The shift s maximising |c(s)| (whole shifts by one inverse FFT, then refined between
+    samples) and c(s) there."""
+    whole = np.argmax(np.abs(np.fft.ifft(spectrum, axis=-1)), axis=-1).astype(float)
+
+    def evaluate(shift: Array) -> tuple[Array, Array]:
+        c, dc = _correlation(spectrum[..., None, :], shift)
+        return np.abs(c[..., 0]) ** 2, 2.0 * np.real(np.conj(c[..., 0]) * dc[..., 0])
+
+    shift = _refine_shift(evaluate, whole)
+    return shift, _correlation(spectrum[..., None, :], shift)[0][..., 0]
+
+
+def _start_fraction(forwards: Array, backwards: Array, reverse: Array, samples: int) -> Array:
+    """Where on the curve the target's first point lands, as a fraction of the curve's length
+    from its first point along its own direction, given the best shifts (in samples) of the
+    curve run forwards and backwards and which won."""
+    # A shift s lays target sample j on the direction's sample j − s, so the target's first
+    # point on sample −s: at fraction −s/M of the curve forwards, +s/M backwards.
+    shift = np.mod(np.where(reverse, backwards, -forwards) / samples, 1.0)
+    return np.where(1.0 - shift < 1e-12, 0.0, shift)  # −1e-17 mod 1 is 1 − 1e-17: the start
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """The best similarity transform of a curve onto a target (:func:`align`), batched over the
+    curves: every field has the batch shape (``translation`` one axis more).
+
+    The transform is p ↦ ``scale``·R(``rotation``)·p + ``translation`` on the curve's points; it
+    lays the curve, run backwards if ``reversed``, from the point at ``shift`` (a fraction of its
+    length from its first point, along its own direction) onward, over the target from its first
+    point onward. ``rms`` is the RMS distance between the two, resampled alike, in the target's
+    units; ``error`` is ``rms`` over the target's RMS radius (about its centroid).
+    ``reversed`` is False and the rest NaN for a curve or target with a NaN point.
+    """
+
+    error: Array
+    rms: Array
+    scale: Array
+    rotation: Array
+    translation: Array
+    reversed: Array
+    shift: Array
+
+
+def align(
+    curve: ArrayLike,
+    target: ArrayLike,
+    *,
+    closed: bool = True,
+    samples: int = 256,
+) -> Alignment:
+    """The best similarity transform (translation, rotation, scale), start point and direction
+    of ``curve`` (…, N, 2) onto ``target`` (…, N′, 2), both resampled at ``samples`` points by
+    length; batch shapes broadcast.
+
+    For a start shift s (in samples) of the centred curve a the best transform is the complex
+    least-squares fit w·a + c ≈ b, w = scale·e^{i·rotation}: w = ⟨a, b⟩_s/‖a‖² and
+    c = mean(b) − w·mean(a), with residual ‖b − mean(b)‖² − |⟨a, b⟩_s|²/‖a‖². The correlation
+    ⟨a, b⟩_s at every whole shift comes from one FFT; the best is then refined between samples
+    on the band-limited correlation, so a start point between two samples costs only the
+    resampling's own O(1/samples²). Open curves (``closed=False``) keep their ends: only the
+    direction is chosen, and ``shift`` is 0 (forwards) or 1 (backwards: from the far end).
+
+    Examples
+    --------
+    An ellipse, run backwards from its point at t = 90° (a quarter of its length), turned by
+    0.5 rad, scaled by 2 and moved by (3, −1):
+
+    >>> t = np.linspace(0, 2 * np.pi, 120, endpoint=False)
+    >>> ellipse = np.stack([3 * np.cos(t), np.sin(t)], -1)
+    >>> c, s = np.cos(0.5), np.sin(0.5)
+    >>> backwards = ellipse[(30 - np.arange(120)) % 120]
+    >>> moved = 2 * backwards @ [[c, s], [-s, c]] + [3, -1]
+    >>> fit = align(ellipse, moved)
+    >>> float(fit.scale), float(fit.rotation), fit.translation.round(6), bool(fit.reversed)
+    (2.0, 0.5, array([ 3., -1.]), True)
+    >>> float(fit.shift), float(fit.error) < 1e-12
+    (0.25, True)
+
+    A curve with a NaN point (a linkage that does not assemble there) has no alignment:
+
+    >>> bad = align([[0, 0], [1, 0], [np.nan, 1]], moved)
+    >>> float(bad.error), float(bad.scale), bool(bad.reversed)
+    (nan, nan, False)
+    """
+    a = resample(curve, samples, closed)
+    b = resample(target, samples, closed)
+    a = a[..., 0] + 1j * a[..., 1]
+    b = b[..., 0] + 1j * b[..., 1]
+    shape = np.broadcast_shapes(a.shape, b.shape)[:-1]
+    mean_a, mean_b = a.mean(axis=-1), b.mean(axis=-1)
+    bc = b - mean_b[..., None]
+    nb = np.sum(np.abs(bc) ** 2, axis=-1)
+    fb = np.fft.fft(bc, axis=-1)
+    # Backwards from the same first point (sample t of the reversed curve is sample −t), or
+    # for an open curve from its other end.
+    reversed_a = np.roll(a[..., ::-1], 1, axis=-1) if closed else a[..., ::-1]
+    fits = []
+    for x in (a, reversed_a):
+        d = x - mean_a[..., None]
+        na = np.sum(np.abs(d) ** 2, axis=-1)
+        if closed:
+            s, corr = _best_correlation(np.conj(np.fft.fft(d, axis=-1)) * fb)
+        else:
+            s, corr = np.zeros(shape), np.sum(np.conj(d) * bc, axis=-1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            fits.append((np.abs(corr) ** 2 / na, corr / na, s))
+    (gain_f, w_f, s_f), (gain_b, w_b, s_b) = fits
+    backwards = gain_b > gain_f  # NaN compares False: a NaN curve stays "forwards"
+    w = np.where(backwards, w_b, w_f)
+    if closed:
+        shift = _start_fraction(s_f, s_b, backwards, samples)
+    else:
+        shift = np.where(backwards, 1.0, 0.0)
+    # The residual ‖b‖² − |⟨a, b⟩|²/‖a‖² cancels to √ε of the size on a near-perfect fit: the
+    # transformed curve's distance to the target is summed instead.
+    d = np.where(backwards[..., None], reversed_a, a) - mean_a[..., None]
+    if closed:
+        d = _shifted(d, np.where(backwards, s_b, s_f), axis=-1)
+    residual = np.sum(np.abs(w[..., None] * d - bc) ** 2, axis=-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        error = np.sqrt(residual / nb)
+        rms = np.sqrt(residual / samples)
+    c = mean_b - w * mean_a
+    bad = np.isnan(error)
+    shift = np.where(bad, np.nan, shift)
+    return Alignment(
+        error=np.broadcast_to(error, shape),
+        rms=np.broadcast_to(rms, shape),
+        scale=np.broadcast_to(np.abs(w), shape),
+        rotation=np.broadcast_to(np.angle(w), shape),
+        translation=np.broadcast_to(np.stack([c.real, c.imag], axis=-1), shape + (2,)),
+        reversed=np.broadcast_to(backwards & ~bad, shape),
+        shift=np.broadcast_to(shift, shape),
+    )
 
 
 def aligned_error(
@@ -452,11 +661,7 @@ def aligned_error(
     ``curve`` (translation, rotation, scale) and the best start point and direction, both
     resampled at ``samples`` points by length; relative to the RMS radius of ``target``.
 
-    For a start shift s of ``curve`` the best transform is a complex least-squares fit
-    w·a + c ≈ b, whose residual is ‖b‖² − |⟨a, b⟩_s|²/‖a‖² (centred a, b). The correlation at
-    every whole shift comes from one FFT; the best is then refined between samples on the
-    band-limited correlation (golden section), so a start point between two samples costs only
-    the resampling's own O(1/samples²).
+    The ``error`` of :func:`align`, which also gives the transform and says how it is found.
 
     Examples
     --------
@@ -467,23 +672,10 @@ def aligned_error(
     >>> ellipse = np.stack([3 * np.cos(t), np.sin(t)], -1)
     >>> float(aligned_error(ellipse, 2 * ellipse + 5)), float(aligned_error(ellipse, ellipse[::-1]))
     (0.0, 3.0e-06)
+
+    A curve with a NaN point has no aligned error:
+
+    >>> float(aligned_error([[0, 0], [1, 0], [np.nan, 1]], ellipse))
+    nan
     """
-    a = resample(curve, samples, closed)
-    b = resample(target, samples, closed)
-    a = a[..., 0] + 1j * a[..., 1]
-    b = b[..., 0] + 1j * b[..., 1]
-    b = b - b.mean(axis=-1, keepdims=True)
-    nb = np.sum(np.abs(b) ** 2, axis=-1)
-    best = np.zeros(np.broadcast_shapes(a.shape, b.shape)[:-1])
-    fb = np.fft.fft(b, axis=-1)
-    for direction in (a, a[..., ::-1]):
-        d = direction - direction.mean(axis=-1, keepdims=True)
-        na = np.sum(np.abs(d) ** 2, axis=-1)
-        if closed:
-            c2 = _best_correlation(np.conj(np.fft.fft(d, axis=-1)) * fb) ** 2
-        else:
-            c2 = np.abs(np.sum(np.conj(d) * b, axis=-1)) ** 2
-        with np.errstate(invalid="ignore", divide="ignore"):
-            best = np.maximum(best, c2 / na)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.sqrt(np.clip(nb - best, 0.0, None) / nb)
+    return align(curve, target, closed=closed, samples=samples).error

@@ -1,0 +1,318 @@
+"""Building an atlas: shards computed as Dask tasks, written atomically, resumable.
+
+The atlas of ``count`` mechanisms is cut into shards of ``shard_size`` rows (the last one
+shorter). Shard i draws its designs from its own random stream,
+``SeedSequence(seed, spawn_key=(i,))``, so what it holds depends on (family, seed, i, its size,
+samples, harmonics) and on nothing else: not on which worker computes it, in what order, or how
+many workers there are. Tasks return their rows to the client, which writes them (workers need
+no shared disk); a finished shard is never recomputed when a killed build is run again.
+
+Shards are byte-identical across runs and worker counts on machines with the same instruction
+set: the compiled kernels give each mechanism the same operations whichever thread runs it.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from linkwright.atlas import store
+from linkwright.atlas.families import (
+    FAMILIES,
+    PARAMS,
+    AtlasFamilyError,
+    curves,
+    describe,
+    describe_variants,
+    sample,
+)
+from linkwright.atlas.index import Index
+
+__all__ = [
+    "DEFAULT_SHARD_SIZE",
+    "FORMAT",
+    "AtlasBuildError",
+    "BuildSpec",
+    "build",
+    "make_shard",
+    "query_designs",
+]
+
+FORMAT = 1
+DEFAULT_SHARD_SIZE = 65_536
+TUNING_QUERIES = 256
+_QUERY_STREAM = 2**31  # spawn key of the held-out queries: no shard index reaches it
+
+
+class AtlasBuildError(ValueError):
+    """A build that cannot run as asked (names the problem)."""
+
+
+@dataclass(frozen=True)
+class BuildSpec:
+    """What an atlas holds; two builds with equal specs write byte-identical shards."""
+
+    family: str
+    count: int
+    seed: int = 0
+    shard_size: int = DEFAULT_SHARD_SIZE
+    samples: int = 64
+    harmonics: int = 8
+    format: int = FORMAT
+
+    def __post_init__(self) -> None:
+        if self.family not in FAMILIES:
+            raise AtlasBuildError(
+                f"--family: must be one of {', '.join(FAMILIES)}, got {self.family!r}"
+            )
+        checks = (
+            ("count", self.count, 1),
+            ("shard_size", self.shard_size, 1),
+            ("samples", self.samples, 8),
+            ("harmonics", self.harmonics, 2),
+            ("seed", self.seed, 0),
+        )
+        for name, value, least in checks:
+            if not isinstance(value, int | np.integer) or value < least:
+                raise AtlasBuildError(f"{name}: must be a whole number ≥ {least}, got {value!r}")
+        if self.harmonics * 2 >= self.samples:
+            raise AtlasBuildError(
+                f"harmonics: {self.harmonics} harmonics need more than {2 * self.harmonics} "
+                f"samples per curve, got {self.samples}"
+            )
+
+    @property
+    def sizes(self) -> list[int]:
+        full, rest = divmod(self.count, self.shard_size)
+        return [self.shard_size] * full + ([rest] if rest else [])
+
+    def as_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def _rng(spec: BuildSpec, stream: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(spec.seed, spawn_key=(stream,)))
+
+
+def make_shard(spec: BuildSpec, index: int) -> np.ndarray:
+    """Shard ``index``'s rows: designs from the shard's own stream, their curves at
+    ``spec.samples`` inputs and their descriptors (the Dask task; a pure function)."""
+    size = spec.sizes[index]
+    params = sample(spec.family, _rng(spec, index), size)
+    desc = describe(spec.family, curves(spec.family, params, spec.samples), spec.harmonics)
+    if not np.all(np.isfinite(desc)):
+        # The filter keeps only linkages that turn fully, so this is a bug, not bad luck.
+        raise AtlasBuildError(f"shard {index}: a kept design traced no curve")
+    return store.shard_table(np.stack([params[k] for k in PARAMS[spec.family]], -1), desc)
+
+
+def query_designs(spec: BuildSpec, count: int = TUNING_QUERIES) -> dict[str, np.ndarray]:
+    """Designs from the family's distribution but outside every shard's stream: the held-out
+    queries the index is tuned and measured on."""
+    return sample(spec.family, _rng(spec, _QUERY_STREAM), count)
+
+
+def _in_process(spec: BuildSpec, todo: list[int]) -> Iterable[tuple[int, np.ndarray]]:
+    for i in todo:
+        yield i, make_shard(spec, i)
+
+
+def _on_dask(
+    spec: BuildSpec, todo: list[int], workers: int, scheduler: str | None
+) -> Iterable[tuple[int, np.ndarray]]:
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise AtlasBuildError(
+            "a Dask build needs dask[distributed] (pip install 'dask[distributed]'); "
+            "--workers 0 builds in this process"
+        ) from None
+    # Dask's nannies set OMP_NUM_THREADS=1 (and the like) in this process's environment before
+    # they spawn workers, and leave it: FAISS's BLAS, loaded afterwards for the index, would
+    # then run on one core.
+    environ = dict(os.environ)
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.ERROR,
+        )
+    try:
+        client = Client(cluster if cluster is not None else scheduler, timeout="30s")
+    except OSError as exc:
+        if cluster is not None:
+            cluster.close()
+        raise AtlasBuildError(f"--scheduler: cannot reach {scheduler} ({exc})") from None
+    try:
+        # A window of tasks in flight keeps finished shards from piling up on the workers.
+        window = 2 * max(1, sum(client.nthreads().values()))
+        pending = list(todo)
+        running = as_completed()
+        for _ in range(min(window, len(pending))):
+            i = pending.pop(0)
+            running.add(
+                client.submit(make_shard, spec, i, key=f"linkwright-shard-{i}-{os.getpid()}")
+            )
+        for future in running:
+            table = future.result()
+            i = int(future.key.split("-")[2])
+            future.release()
+            if pending:
+                j = pending.pop(0)
+                running.add(
+                    client.submit(make_shard, spec, j, key=f"linkwright-shard-{j}-{os.getpid()}")
+                )
+            yield i, table
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+        os.environ.clear()
+        os.environ.update(environ)
+
+
+def build(
+    family: str,
+    count: int,
+    out: str | os.PathLike[str],
+    *,
+    seed: int = 0,
+    shard_size: int = DEFAULT_SHARD_SIZE,
+    samples: int = 64,
+    harmonics: int = 8,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: Callable[[float], None] | None = None,
+) -> dict[str, Any]:
+    """Build (or finish building) an atlas of ``count`` mechanisms of ``family`` in ``out``.
+
+    Parameters
+    ----------
+    family : ``"fourbar"``, ``"geared-fivebar"`` or ``"spherical-fourbar"``
+        (:mod:`linkwright.atlas.families` states each one's design distribution).
+    count : mechanisms in the atlas (all of them turn fully).
+    out : the atlas directory (created).
+    seed : the same seed gives the same shards, whatever ``workers`` or ``scheduler``.
+    shard_size, samples, harmonics : rows per shard; curve samples per turn; harmonics per
+        descriptor.
+    workers : 0 builds in this process; n > 0 on a local Dask cluster of n processes; default
+        the machine's cores, or this process for a single shard.
+    scheduler : address of a running Dask scheduler (its workers need linkwright installed).
+    progress : called with the fraction done, in [0, 1].
+
+    Returns
+    -------
+    The manifest (also written to ``out/atlas.json``): the spec, each shard's count and
+    SHA-256, the index and the build's figures.
+
+    Raises
+    ------
+    AtlasBuildError
+        For a bad spec, or an ``out`` that holds a different atlas.
+    """
+    try:
+        spec = BuildSpec(family, count, seed, shard_size, samples, harmonics)
+    except AtlasFamilyError as exc:
+        raise AtlasBuildError(str(exc)) from None
+    root = Path(out)
+    if root.exists() and not root.is_dir():
+        raise AtlasBuildError(f"--out: {root} exists and is not a directory")
+    root.mkdir(parents=True, exist_ok=True)
+    store.clear_partial(root)
+    previous = root / store.BUILD
+    if previous.exists():
+        held = store.read_json(previous)
+        if held != spec.as_dict():
+            raise AtlasBuildError(
+                f"--out: {root} holds a different atlas ({_describe(held)}); "
+                f"choose another directory or delete it"
+            )
+    if (root / store.MANIFEST).exists():
+        if progress:
+            progress(1.0)
+        return store.read_json(root / store.MANIFEST)
+    store.write_json(previous, spec.as_dict())
+
+    t0 = time.perf_counter()
+    sizes = spec.sizes
+    digests = store.finished_shards(root, sizes)
+    todo = [i for i in range(len(sizes)) if i not in digests]
+    resumed = len(digests)
+    if workers is None:
+        workers = 0 if len(todo) <= 1 else (os.cpu_count() or 1)
+    if workers < 0:
+        raise AtlasBuildError(f"--workers: must be 0 (this process) or more, got {workers}")
+    results = (
+        _on_dask(spec, todo, workers, scheduler)
+        if todo and (scheduler is not None or workers > 0)
+        else _in_process(spec, todo)
+    )
+    done_rows = sum(sizes[i] for i in digests)
+    shard_weight = 0.9
+    for i, table in results:
+        digests[i] = store.write_shard(root, i, table)
+        done_rows += sizes[i]
+        if progress:
+            progress(shard_weight * done_rows / spec.count)
+    t_shards = time.perf_counter() - t0
+
+    vectors = _all_descriptors(root, len(sizes))
+    index = Index.build(vectors)
+    queries = describe_variants(
+        family,
+        curves(family, query_designs(spec), spec.samples),
+        spec.harmonics,
+    )
+    recall = index.tune(vectors, queries.reshape(-1, queries.shape[-1]), queries.shape[-2])
+    index.save(root / store.INDEX)
+    t_all = time.perf_counter() - t0
+    if progress:
+        progress(1.0)
+    computed = spec.count - sum(sizes[i] for i in range(resumed))
+    manifest = {
+        "spec": spec.as_dict(),
+        "params": list(PARAMS[family]),
+        "shards": [{"count": sizes[i], "sha256": digests[i]} for i in range(len(sizes))],
+        "descriptor_size": int(vectors.shape[1]),
+        "index": {
+            "kind": index.kind,
+            "nlist": int(getattr(index.handle, "nlist", 0)),
+            "nprobe": index.nprobe,
+            "recall_at_10": recall,
+            "tuning_queries": TUNING_QUERIES,
+        },
+        "build": {
+            "seconds_shards": round(t_shards, 3),
+            "seconds_total": round(t_all, 3),
+            "curves_computed": computed,
+            "shards_resumed": resumed,
+            "workers": "scheduler " + scheduler if scheduler else workers,
+            "bytes": _bytes(root),
+        },
+    }
+    store.write_json(root / store.MANIFEST, manifest)
+    return manifest
+
+
+def _describe(spec: dict[str, Any]) -> str:
+    keys = ("family", "count", "seed", "shard_size", "samples", "harmonics")
+    return ", ".join(f"{k} {spec.get(k)}" for k in keys)
+
+
+def _all_descriptors(root: Path, shards: int) -> np.ndarray:
+    parts = [store.read_shard(root, i)["descriptor"] for i in range(shards)]
+    return np.ascontiguousarray(np.concatenate(parts), dtype=np.float32)
+
+
+def _bytes(root: Path) -> int:
+    return sum(p.stat().st_size for p in root.iterdir() if p.is_file())

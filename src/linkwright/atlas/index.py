@@ -1,0 +1,191 @@
+"""Nearest descriptors: an exact search, or a FAISS inverted-file index for large atlases.
+
+A query is a set of descriptor *variants* (one per normalisation choice, see
+:func:`linkwright.curves.descriptor_variants`); a stored curve's distance to the query is its
+least distance to any variant. Both searches below answer with that distance.
+
+Up to :data:`EXACT_UP_TO` entries the search is exact (FAISS ``IndexFlatL2``, or NumPy where
+FAISS is not installed). Beyond, an ``IndexIVFFlat`` (Jégou, Douze and Schmid's inverted file
+with exact distances in the probed lists) with about 2√N lists, trained on an evenly spread
+subset, and its ``nprobe`` chosen at build time as the least power of two whose recall@10
+against the exact search reaches :data:`TARGET_RECALL` on held-out queries.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from linkwright.atlas.store import write_atomic
+
+__all__ = [
+    "EXACT_UP_TO",
+    "TARGET_RECALL",
+    "Index",
+    "exact_search",
+    "faiss_available",
+    "merge_variants",
+    "recall_at",
+]
+
+EXACT_UP_TO = 200_000
+TARGET_RECALL = 0.97
+_SEED = 1234
+
+
+def _faiss() -> Any | None:
+    try:
+        import faiss
+    except ImportError:  # pragma: no cover - faiss is in the dev and atlas extras
+        return None
+    return faiss
+
+
+def faiss_available() -> bool:
+    return _faiss() is not None
+
+
+def merge_variants(dist: NDArray, ids: NDArray, variants: int, k: int) -> tuple[NDArray, NDArray]:
+    """Per query, the k nearest distinct ids over its variants' answers (rows of ``dist`` and
+    ``ids`` grouped ``variants`` at a time), each at its least distance. Missing → id −1."""
+    q = dist.shape[0] // variants
+    dist = dist.reshape(q, -1)
+    ids = ids.reshape(q, -1)
+    out_d = np.full((q, k), np.inf)
+    out_i = np.full((q, k), -1, dtype=np.int64)
+    for r in range(q):
+        order = np.argsort(dist[r], kind="stable")
+        seen_ids, first = np.unique(ids[r][order], return_index=True)
+        keep = np.sort(first[seen_ids >= 0])[:k]
+        out_d[r, : keep.size] = dist[r][order][keep]
+        out_i[r, : keep.size] = ids[r][order][keep]
+    return out_d, out_i
+
+
+def exact_search(vectors: NDArray, queries: NDArray, k: int) -> tuple[NDArray, NDArray]:
+    """Squared distances and ids of the k nearest rows of ``vectors`` (N, D) to each query
+    (Q, D), by brute force in float64 (ties by the smaller id).
+
+    Near neighbours in a large atlas lie 1e-6 apart (squared) while every descriptor has unit
+    length: the expansion |x|² − 2x·q + |q|² loses them in float32 rounding (FAISS's flat index
+    uses it for batches of queries), so the reference search works in float64.
+    """
+    v = np.asarray(vectors)
+    qv = np.asarray(queries, dtype=np.float64)
+    k = min(k, v.shape[0])
+    q2 = np.sum(qv * qv, 1)[:, None]
+    best_d = np.full((qv.shape[0], 0), np.inf)
+    best_i = np.zeros((qv.shape[0], 0), dtype=np.int64)
+    block = max(4096, (1 << 24) // max(1, qv.shape[0]))  # ≤ 128 MB of distances at a time
+    for start in range(0, v.shape[0], block):
+        part = np.asarray(v[start : start + block], dtype=np.float64)
+        d = np.einsum("ij,ij->i", part, part)[None, :] - 2.0 * qv @ part.T + q2
+        take = min(k, part.shape[0])
+        idx = np.argpartition(d, take - 1, axis=1)[:, :take]
+        best_d = np.concatenate([best_d, np.take_along_axis(d, idx, 1)], axis=1)
+        best_i = np.concatenate([best_i, idx + start], axis=1)
+        order = np.lexsort((best_i, best_d), axis=1)[:, :k]
+        best_d = np.take_along_axis(best_d, order, 1)
+        best_i = np.take_along_axis(best_i, order, 1)
+    return np.maximum(best_d, 0.0), best_i
+
+
+def recall_at(found: NDArray, truth: NDArray) -> float:
+    """Mean fraction of each row of ``truth`` (ids) that ``found`` holds."""
+    hits = [np.intersect1d(f[f >= 0], t[t >= 0]).size / max(1, (t >= 0).sum())
+            for f, t in zip(found, truth, strict=True)]  # fmt: skip
+    return float(np.mean(hits))
+
+
+@dataclass
+class Index:
+    """A loaded search index over an atlas's descriptors (``kind`` "exact" or "ivf")."""
+
+    kind: str
+    handle: Any
+    """A FAISS index, or the (N, D) float32 descriptors for the NumPy exact search."""
+    nprobe: int = 0
+
+    @property
+    def size(self) -> int:
+        return int(self.handle.ntotal) if hasattr(self.handle, "ntotal") else len(self.handle)
+
+    @classmethod
+    def build(cls, vectors: NDArray, *, kind: str | None = None) -> Index:
+        """An index over ``vectors`` (N, D): exact up to :data:`EXACT_UP_TO` rows, else IVF."""
+        v = np.ascontiguousarray(vectors, dtype=np.float32)
+        faiss = _faiss()
+        kind = kind or ("exact" if v.shape[0] <= EXACT_UP_TO or faiss is None else "ivf")
+        if kind == "exact":
+            if faiss is None:
+                return cls("exact", v)
+            flat = faiss.IndexFlatL2(v.shape[1])
+            flat.add(v)
+            return cls("exact", flat)
+        if faiss is None:
+            raise ImportError("an IVF index needs faiss (pip install faiss-cpu)")
+        n, d = v.shape
+        nlist = int(np.clip(2 ** round(np.log2(2.0 * np.sqrt(n))), 16, 65536))
+        train = v[np.linspace(0, n - 1, min(n, 40 * nlist)).astype(np.int64)]
+        quantizer = faiss.IndexFlatL2(d)
+        ivf = faiss.IndexIVFFlat(quantizer, d, nlist)
+        ivf.cp.seed = _SEED
+        ivf.train(train)
+        for start in range(0, n, 1 << 20):
+            ivf.add(v[start : start + (1 << 20)])
+        return cls("ivf", ivf, nprobe=1)
+
+    def tune(self, vectors: NDArray, queries: NDArray, variants: int, k: int = 10) -> float:
+        """Choose the least power-of-two ``nprobe`` whose recall@k (over variant sets of
+        ``queries``, (Q·V, D)) against the exact search reaches :data:`TARGET_RECALL`;
+        returns that recall (1.0 for an exact index)."""
+        if self.kind == "exact":
+            return 1.0
+        faiss = _faiss()
+        if faiss is not None:
+            flat = faiss.IndexFlatL2(vectors.shape[1])
+            flat.add(np.ascontiguousarray(vectors, dtype=np.float32))
+            d, i = flat.search(np.ascontiguousarray(queries, dtype=np.float32), k)
+            del flat
+        else:
+            d, i = exact_search(vectors, queries, k)
+        truth = merge_variants(d, i, variants, k)[1]
+        nlist = self.handle.nlist
+        probe, recall = 1, 0.0
+        while True:
+            self.nprobe = probe
+            recall = recall_at(self.search(queries, variants, k)[1], truth)
+            if recall >= TARGET_RECALL or probe >= nlist:
+                return recall
+            probe *= 2
+
+    def search(self, queries: NDArray, variants: int, k: int) -> tuple[NDArray, NDArray]:
+        """(Q, k) squared distances and ids for queries given as (Q·V, D) variant rows."""
+        q = np.ascontiguousarray(queries, dtype=np.float32)
+        if isinstance(self.handle, np.ndarray):
+            d, i = exact_search(self.handle, q, k)
+        else:
+            if self.kind == "ivf":
+                self.handle.nprobe = self.nprobe
+            d, i = self.handle.search(q, min(k, self.size))
+        return merge_variants(d, i, variants, k)
+
+    def save(self, path: Path) -> None:
+        faiss = _faiss()
+        if faiss is None or isinstance(self.handle, np.ndarray):
+            return  # the NumPy search reads the shards instead
+        write_atomic(path, faiss.serialize_index(self.handle).tobytes())
+
+    @classmethod
+    def load(cls, path: Path, kind: str, nprobe: int, vectors: NDArray | None = None) -> Index:
+        faiss = _faiss()
+        if faiss is None or not Path(path).exists():
+            if vectors is None:
+                raise ImportError("this atlas's index needs faiss (pip install faiss-cpu)")
+            return cls("exact", np.ascontiguousarray(vectors, dtype=np.float32))
+        data = np.frombuffer(Path(path).read_bytes(), dtype=np.uint8)
+        return cls(kind, faiss.deserialize_index(data), nprobe=nprobe)

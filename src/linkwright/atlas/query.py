@@ -1,0 +1,402 @@
+"""Matching a curve against an atlas: nearest descriptors, re-ranked by the aligned error,
+placed where the query was drawn, optionally refined.
+
+1. The query's descriptor variants are searched in the atlas's index for ``candidates`` entries.
+2. Each candidate's curve is traced again, densely (256 inputs), and aligned onto the query
+   (:func:`linkwright.curves.align`: a similarity in the plane, a rotation of the sphere; best
+   start and direction); candidates are ranked by that aligned error.
+3. Each of the best ``top`` is carried by its transform into the query's frame: in the plane its
+   lengths are scaled, its crank pivot moved and its frame line turned; on the sphere its axes
+   are rotated. So each one traces the query where the user drew it.
+4. With ``refine``, the best few are optimised locally (:func:`linkwright.synthesis.fit_path`
+   started from them within tight bounds, no timing, closed curve) until the RMS distance from
+   the query's points to the curve is within ``tolerance`` of the query's size, or the budget
+   runs out; a refinement is kept only where it is better.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import least_squares
+
+from linkwright.atlas.atlas import Atlas
+from linkwright.atlas.families import curves, describe_variants
+from linkwright.curves import align, sphere_align
+from linkwright.mechanisms import Mechanism, solve
+from linkwright.synthesis.path_families import MODELS, rodrigues, sphere_rotation
+
+__all__ = ["AtlasQueryError", "Match", "query"]
+
+Array = NDArray[np.float64]
+
+RANK_SAMPLES = 256
+REFINED = 3
+"""How many of the best matches ``refine`` optimises."""
+
+
+class AtlasQueryError(ValueError):
+    """A query that cannot be matched (names the problem)."""
+
+
+@dataclass(frozen=True)
+class Match:
+    """One atlas entry matched to a query curve.
+
+    Attributes
+    ----------
+    atlas_id : the entry's row in the atlas.
+    mechanism : the linkage placed in the query's frame (planar: the family's mechanism;
+        sphere: a spherical :class:`~linkwright.mechanisms.Linkage`), tracing the query.
+    named : the same linkage as its named family (sphere: the
+        :class:`~linkwright.mechanisms.SphericalFourBar` in paper 000's frame).
+    error : aligned RMS error of the curve against the query, relative to the query's RMS
+        radius (plane) or RMS chord from its mean direction (sphere).
+    distance : RMS distance from the query's points to ``mechanism``'s curve, in the query's
+        units (chords on the sphere): no realignment, the placed linkage itself.
+    scale, rotation, translation : the transform that carried the atlas curve onto the query:
+        query ≈ scale·R(rotation)·atlas + translation (plane, rotation in radians); on the sphere
+        scale 1, rotation the 3×3 matrix and translation None.
+    descriptor_distance : the index's distance (squared, between descriptors).
+    refined : whether ``mechanism`` came from the local refinement.
+    """
+
+    atlas_id: int
+    mechanism: Mechanism
+    named: Mechanism
+    error: float
+    distance: float
+    scale: float
+    rotation: float | Array
+    translation: Array | None
+    descriptor_distance: float
+    refined: bool = False
+    params: dict[str, float] = field(default_factory=dict, repr=False)
+    """The placed linkage's parameters (pose and shape, :func:`fit_path`'s names)."""
+
+
+def _query_points(space: str, points: ArrayLike) -> Array:
+    try:
+        p = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        raise AtlasQueryError("points: must be numbers") from None
+    dim = 2 if space == "plane" else 3
+    if p.ndim != 2 or p.shape[1] != dim:
+        what = "(N, 2) points" if dim == 2 else "(N, 3) unit vectors"
+        raise AtlasQueryError(f"points: this atlas's curves need {what}, got shape {p.shape}")
+    if len(p) < 3:
+        raise AtlasQueryError(f"points: a curve needs at least 3 points, got {len(p)}")
+    if not np.all(np.isfinite(p)):
+        raise AtlasQueryError("points: must be finite (found NaN or infinity)")
+    if dim == 3:
+        r = np.linalg.norm(p, axis=1)
+        if np.any(np.abs(r - 1.0) > 0.01):
+            raise AtlasQueryError("points: must be unit vectors on the sphere (within 1 %)")
+        p = p / r[:, None]
+    span = np.max(np.linalg.norm(p - p.mean(axis=0), axis=1))
+    if not span > 1e-12 * max(1.0, float(np.max(np.abs(p)))):
+        raise AtlasQueryError("points: all the same point; a curve needs extent")
+    return p
+
+
+def _to_sphere_pose(R: Array) -> tuple[float, float, float]:
+    """(lon, sinlat, spin) of a rotation as :func:`sphere_rotation` builds it."""
+    a0, t = R[:, 0], R[:, 1]
+    lon = float(np.arctan2(a0[1], a0[0]))
+    east = np.array([-np.sin(lon), np.cos(lon), 0.0])
+    north = np.cross(a0, east)
+    return lon, float(np.clip(a0[2], -1.0, 1.0)), float(np.arctan2(t @ north, t @ east))
+
+
+def _placed_params(family: str, design: dict[str, float], fit, k: int) -> dict[str, float]:
+    """The atlas design ``design`` carried by alignment ``fit`` (entry k) into the query frame,
+    as fit_path's parameters."""
+    model = MODELS[family]
+    out = dict(design)
+    if model.space == "sphere":
+        lon, sinlat, spin = _to_sphere_pose(fit.rotation[k])
+        out.update(lon=lon, sinlat=sinlat, spin=spin)
+        return out
+    s = float(fit.scale[k])
+    for name in model.lengths + ("u", "v"):
+        out[name] = design[name] * s
+    tx, ty = (float(c) for c in fit.translation[k])
+    out.update(x=tx, y=ty, frame_angle=float(fit.rotation[k]))
+    return out
+
+
+def _mechanisms(family: str, params: dict[str, float]) -> tuple[Mechanism, Mechanism]:
+    model = MODELS[family]
+    shape = {k: params[k] for k in model.shape_names}
+    if model.space == "sphere":
+        pose = sphere_rotation(
+            np.array(params["lon"]), np.array(params["sinlat"]), np.array(params["spin"])
+        )
+    else:
+        pose = (params["x"], params["y"], params["frame_angle"])
+    user, named, _ = model.placed(shape, params["assembly"], pose)
+    return user, named
+
+
+def _traced(mechanism: Mechanism, samples: int) -> Array:
+    theta = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
+    return solve(mechanism, theta, order=0).positions["P"]
+
+
+def _distance(points: Array, curve: Array) -> float:
+    """RMS distance from each point to the closed polyline ``curve`` (chords on the sphere):
+    the foot on either segment beside the point's nearest vertex (the curve is sampled finely
+    enough that the nearest segment is one of those two)."""
+    m = len(curve)
+    near = np.argmin(np.sum((points[:, None, :] - curve[None]) ** 2, axis=-1), axis=1)
+    best = np.full(len(points), np.inf)
+    for first in (near - 1, near):
+        a, b = curve[first % m], curve[(first + 1) % m]
+        d, rel = b - a, points - a
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t = np.clip(np.sum(rel * d, -1) / np.sum(d * d, -1), 0.0, 1.0)
+        gap = rel - np.nan_to_num(t)[:, None] * d
+        best = np.minimum(best, np.sum(gap * gap, -1))
+    return float(np.sqrt(np.mean(best)))
+
+
+def _aligned(space: str, curve: Array, target: Array, samples: int = RANK_SAMPLES):
+    if space == "plane":
+        return align(curve, target, samples=samples)
+    return sphere_align(curve, target, samples=samples)
+
+
+def query(
+    atlas: Atlas,
+    points: ArrayLike,
+    *,
+    top: int = 5,
+    candidates: int | None = None,
+    refine: bool = False,
+    tolerance: float = 0.001,
+    budget: float = 5.0,
+    seed: int = 0,
+    progress: Callable[[float], None] | None = None,
+) -> list[Match]:
+    """The ``top`` atlas entries whose curves best match the closed curve through ``points``,
+    best first, each placed in the query's frame (module docstring). Refinements that converge
+    to one linkage are returned once, so ``refine`` may return fewer than ``top``.
+
+    Parameters
+    ----------
+    atlas : an opened atlas (:func:`~linkwright.atlas.open_atlas`,
+        :func:`~linkwright.atlas.default_atlas`).
+    points : (N, 2) points of the query curve, or (N, 3) unit vectors for a spherical atlas; the
+        last point joins the first.
+    top : matches returned.
+    candidates : entries taken from the index and re-ranked; default max(50, 10·top).
+    refine : optimise the best :data:`REFINED` matches locally.
+    tolerance : refinement stops once the RMS distance from the query's points to the curve is
+        at most this fraction of the query's size (its RMS radius; on the sphere its RMS chord
+        from its mean direction).
+    budget : seconds for each refinement.
+    seed : seeds the refinement (same seed, same result unless the budget cuts it short).
+    progress : called with the fraction done, in [0, 1].
+
+    Raises
+    ------
+    AtlasQueryError
+        For points that are not a curve of this atlas's space, or bad counts.
+    """
+    family = atlas.family
+    model = MODELS[family]
+    q = _query_points(model.space, points)
+    if not (isinstance(top, int) and top >= 1):
+        raise AtlasQueryError(f"top: must be a whole number ≥ 1, got {top!r}")
+    want = max(50, 10 * top) if candidates is None else int(candidates)
+    if want < top:
+        raise AtlasQueryError(f"candidates: must be at least top ({top}), got {want}")
+    if not (tolerance > 0):
+        raise AtlasQueryError(f"tolerance: must be positive, got {tolerance}")
+    variants = describe_variants(family, q[None], atlas.spec.harmonics)[0]
+    dist, ids = atlas.index.search(variants, variants.shape[0], min(want, atlas.count))
+    keep = ids[0] >= 0
+    dist, ids = dist[0][keep], ids[0][keep]
+    # Ranked coarsely (64 samples) first, then the best few finely: the aligned error's
+    # refinement between samples is the query's largest cost.
+    coarse = _aligned(model.space, curves(family, atlas.designs(ids), 64), q, 64).error
+    keep = np.argsort(np.where(np.isfinite(coarse), coarse, np.inf), kind="stable")
+    keep = np.sort(keep[: max(2 * top, 10)])
+    dist, ids = dist[keep], ids[keep]
+    designs = atlas.designs(ids)
+    fit = _aligned(model.space, curves(family, designs, RANK_SAMPLES), q)
+    order = np.argsort(np.where(np.isfinite(fit.error), fit.error, np.inf), kind="stable")[:top]
+    size = _size(model.space, q)
+    matches: list[Match] = []
+    for rank, k in enumerate(order):
+        design = {name: float(v[k]) for name, v in designs.items()}
+        params = _placed_params(family, design, fit, int(k))
+        user, named = _mechanisms(family, params)
+        is_sphere = model.space == "sphere"
+        matches.append(
+            Match(
+                atlas_id=int(ids[k]),
+                mechanism=user,
+                named=named,
+                error=float(fit.error[k]),
+                distance=_distance(q, _traced(user, 1024)),
+                scale=1.0 if is_sphere else float(fit.scale[k]),
+                rotation=np.array(fit.rotation[k]) if is_sphere else float(fit.rotation[k]),
+                translation=None if is_sphere else np.array(fit.translation[k]),
+                descriptor_distance=float(dist[k]),
+                params=params,
+            )
+        )
+        if progress:
+            progress(0.2 * (rank + 1) / len(order) if refine else (rank + 1) / len(order))
+    if refine:
+        chosen = matches[:REFINED]
+        for i, m in enumerate(chosen):
+            better = _refine(family, q, m, size, tolerance, budget, seed)
+            if better is not None:
+                matches[i] = better
+            if progress:
+                progress(0.2 + 0.8 * (i + 1) / len(chosen))
+        matches.sort(key=lambda m: m.distance)
+        matches = _distinct(matches, size)
+    return matches
+
+
+def _distinct(matches: list[Match], size: float) -> list[Match]:
+    """Matches without repeats: refinements of different entries can converge to one linkage,
+    and a designer choosing among candidates wants each once."""
+    angles = {"frame_angle", "gear_phase", "ratio", "assembly"}
+
+    def close(a: Match, b: Match) -> bool:
+        # Within 0.1 % of the curve's size (lengths, places) or 1e-3 rad (angles, arcs).
+        planar = a.translation is not None
+        return a.params.keys() == b.params.keys() and all(
+            abs(a.params[n] - b.params[n]) <= 1e-3 * (size if planar and n not in angles else 1)
+            for n in a.params
+        )
+
+    kept: list[Match] = []
+    for m in matches:
+        same = any(close(m, k) for k in kept)
+        if not same:
+            kept.append(m)
+    return kept
+
+
+def _size(space: str, q: Array) -> float:
+    """The query's size: RMS distance of its points from their centroid (plane), or RMS chord
+    from their mean direction (sphere)."""
+    c = q.mean(axis=0)
+    if space == "sphere":
+        c = c / np.linalg.norm(c)
+    return float(np.sqrt(np.mean(np.sum((q - c) ** 2, axis=1))))
+
+
+def _refine(
+    family: str, q: Array, m: Match, size: float, tolerance: float, budget: float, seed: int
+) -> Match | None:
+    """Least squares from the match: its parameters and one input per query point together,
+    residuals P(θ_i) − q_i, so the optimum puts each θ_i at its point's foot on the curve and
+    minimises the RMS distance from the points to the curve. Lengths move as logarithms (they
+    stay positive), arcs within (0, π); the sphere's pose as a small rotation after the
+    match's."""
+    del seed  # the refinement is deterministic
+    model = MODELS[family]
+    p0 = dict(m.params)
+    sphere = model.space == "sphere"
+    names = [n for n in model.shape_names if n != "ratio"]
+    names += ["w0", "w1", "w2"] if sphere else ["x", "y", "frame_angle"]
+    logs = [n in model.lengths and not sphere for n in names]
+    x0 = np.array([np.log(p0[n]) if lg else (0.0 if n[0] == "w" and sphere else p0[n])
+                   for n, lg in zip(names, logs, strict=True)])  # fmt: skip
+    R0 = np.asarray(m.rotation) if sphere else None
+    lo = np.full(len(names), -np.inf)
+    hi = np.full(len(names), np.inf)
+    if sphere:
+        for i, n in enumerate(names):
+            if n in model.lengths:
+                lo[i], hi[i] = 1e-3, np.pi - 1e-3
+            elif n == "point_arc":
+                lo[i], hi[i] = 0.0, np.pi
+    x0 = np.clip(x0, lo + 1e-12, hi - 1e-12)
+
+    def params_of(x: Array) -> dict[str, float]:
+        out = dict(p0)
+        for n, lg, v in zip(names, logs, x, strict=True):
+            out[n] = float(np.exp(v)) if lg else float(v)
+        return out
+
+    def mechanism(x: Array) -> Mechanism | None:
+        par = params_of(x)
+        shape = {k: par[k] for k in model.shape_names}
+        if sphere:
+            pose = R0 @ rodrigues(np.array([par["w0"], par["w1"], par["w2"]]))
+        else:
+            pose = (par["x"], par["y"], par["frame_angle"])
+        try:
+            return model.placed(shape, par["assembly"], pose)[0]
+        except ValueError:
+            return None
+
+    # Each point's input starts at its nearest sample of the match's curve.
+    theta_grid = np.linspace(0.0, 2.0 * np.pi, 1024, endpoint=False)
+    dense = _traced(m.mechanism, 1024)
+    near = np.argmin(np.sum((q[:, None, :] - dense[None]) ** 2, axis=-1), axis=1)
+    n_par, n_pts = len(names), len(q)
+    z0 = np.concatenate([x0, theta_grid[near]])
+
+    def residuals(z: Array) -> Array:
+        mech = mechanism(z[:n_par])
+        if mech is None:
+            return np.full(n_pts * q.shape[1], 10.0 * size)
+        P = solve(mech, z[n_par:], order=0).positions["P"]
+        return np.nan_to_num(P - q, nan=10.0 * size).ravel()
+
+    sparsity = np.zeros((n_pts * q.shape[1], n_par + n_pts), dtype=bool)
+    sparsity[:, :n_par] = True
+    for i in range(n_pts):
+        sparsity[i * q.shape[1] : (i + 1) * q.shape[1], n_par + i] = True
+    goal = tolerance * size
+    start = time.perf_counter()
+    z, best = z0, float(np.sqrt(np.mean(residuals(z0).reshape(n_pts, -1) ** 2) * q.shape[1]))
+    bounds = (np.r_[lo, np.full(n_pts, -np.inf)], np.r_[hi, np.full(n_pts, np.inf)])
+    while best > goal and time.perf_counter() - start < budget:
+        sol = least_squares(
+            residuals, z, jac_sparsity=sparsity, bounds=bounds, method="trf", max_nfev=60,
+            x_scale="jac",
+        )  # fmt: skip
+        rms = float(np.sqrt(2.0 * sol.cost / n_pts))
+        if not rms < best * (1 - 1e-3):
+            break
+        z, best = sol.x, rms
+    user = mechanism(z[:n_par])
+    if user is None:
+        return None
+    traced = _traced(user, 1024)
+    if not np.all(np.isfinite(traced)):
+        return None  # refined past a limit position: the input no longer turns fully
+    distance = _distance(q, traced)
+    if not distance < m.distance:
+        return None
+    again = _aligned(model.space, _traced(user, RANK_SAMPLES)[None], q)
+    named = model.placed(
+        {k: params_of(z[:n_par])[k] for k in model.shape_names}, p0["assembly"],
+        (0.0, 0.0, 0.0) if not sphere else np.eye(3),
+    )[1]  # fmt: skip
+    return Match(
+        atlas_id=m.atlas_id,
+        mechanism=user,
+        named=named,
+        error=float(again.error[0]),
+        distance=distance,
+        scale=m.scale,
+        rotation=m.rotation,
+        translation=m.translation,
+        descriptor_distance=m.descriptor_distance,
+        refined=True,
+        params=params_of(z[:n_par]),
+    )
