@@ -266,14 +266,14 @@ def build(
             progress(shard_weight * done_rows / spec.count)
     t_shards = time.perf_counter() - t0
 
-    vectors = _all_descriptors(root, len(sizes))
-    index = Index.build(vectors)
+    blocks = [store.read_shard(root, i)["descriptor"] for i in range(len(sizes))]
+    index = Index.build(blocks)
     queries = describe_variants(
         family,
         curves(family, query_designs(spec), spec.samples),
         spec.harmonics,
     )
-    recall = index.tune(vectors, queries.reshape(-1, queries.shape[-1]), queries.shape[-2])
+    recall = index.tune(blocks, queries.reshape(-1, queries.shape[-1]), queries.shape[-2])
     index.save(root / store.INDEX)
     t_all = time.perf_counter() - t0
     if progress:
@@ -283,7 +283,7 @@ def build(
         "spec": spec.as_dict(),
         "params": list(PARAMS[family]),
         "shards": [{"count": sizes[i], "sha256": digests[i]} for i in range(len(sizes))],
-        "descriptor_size": int(vectors.shape[1]),
+        "descriptor_size": int(blocks[0].shape[1]),
         "index": {
             "kind": index.kind,
             "nlist": int(getattr(index.handle, "nlist", 0)),
@@ -307,11 +307,6 @@ def build(
 def _describe(spec: dict[str, Any]) -> str:
     keys = ("family", "count", "seed", "shard_size", "samples", "harmonics")
     return ", ".join(f"{k} {spec.get(k)}" for k in keys)
-
-
-def _all_descriptors(root: Path, shards: int) -> np.ndarray:
-    parts = [store.read_shard(root, i)["descriptor"] for i in range(shards)]
-    return np.ascontiguousarray(np.concatenate(parts), dtype=np.float32)
 
 
 def _bytes(root: Path) -> int:

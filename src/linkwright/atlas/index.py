@@ -13,6 +13,7 @@ against the exact search reaches :data:`TARGET_RECALL` on held-out queries.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,12 +21,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from linkwright.atlas.store import write_atomic
+from linkwright.atlas.store import atomic_path
 
 __all__ = [
     "EXACT_UP_TO",
     "TARGET_RECALL",
     "Index",
+    "exact_blocks",
     "exact_search",
     "faiss_available",
     "merge_variants",
@@ -94,6 +96,49 @@ def exact_search(vectors: NDArray, queries: NDArray, k: int) -> tuple[NDArray, N
     return np.maximum(best_d, 0.0), best_i
 
 
+def _f32(block: NDArray) -> NDArray[np.float32]:
+    return np.ascontiguousarray(block, dtype=np.float32)
+
+
+def _rows(parts: list[NDArray], rows: NDArray) -> NDArray[np.float32]:
+    """Rows at global positions ``rows`` (sorted) of the blocks taken end to end."""
+    starts = np.cumsum([0] + [len(b) for b in parts])
+    out = []
+    for i, b in enumerate(parts):
+        mine = rows[(rows >= starts[i]) & (rows < starts[i + 1])] - starts[i]
+        if mine.size:
+            out.append(_f32(b[mine]))
+    return np.concatenate(out)
+
+
+def exact_blocks(
+    blocks: Sequence[NDArray] | NDArray, queries: NDArray, k: int
+) -> tuple[NDArray, NDArray]:
+    """:func:`exact_search` over blocks taken end to end (FAISS's flat search per block where
+    it is installed — it computes the few-query distances directly — else NumPy), one block in
+    memory at a time."""
+    parts = [blocks] if isinstance(blocks, np.ndarray) else list(blocks)
+    faiss = _faiss()
+    q = _f32(queries)
+    best_d = np.full((len(q), 0), np.inf)
+    best_i = np.zeros((len(q), 0), dtype=np.int64)
+    start = 0
+    for b in parts:
+        if faiss is not None:
+            flat = faiss.IndexFlatL2(b.shape[1])
+            flat.add(_f32(b))
+            d, i = flat.search(q, min(k, len(b)))
+        else:
+            d, i = exact_search(b, q, k)
+        best_d = np.concatenate([best_d, d], axis=1)
+        best_i = np.concatenate([best_i, i + start], axis=1)
+        order = np.lexsort((best_i, best_d), axis=1)[:, :k]
+        best_d = np.take_along_axis(best_d, order, 1)
+        best_i = np.take_along_axis(best_i, order, 1)
+        start += len(b)
+    return best_d, best_i
+
+
 def recall_at(found: NDArray, truth: NDArray) -> float:
     """Mean fraction of each row of ``truth`` (ids) that ``found`` holds."""
     hits = [np.intersect1d(f[f >= 0], t[t >= 0]).size / max(1, (t >= 0).sum())
@@ -115,45 +160,43 @@ class Index:
         return int(self.handle.ntotal) if hasattr(self.handle, "ntotal") else len(self.handle)
 
     @classmethod
-    def build(cls, vectors: NDArray, *, kind: str | None = None) -> Index:
-        """An index over ``vectors`` (N, D): exact up to :data:`EXACT_UP_TO` rows, else IVF."""
-        v = np.ascontiguousarray(vectors, dtype=np.float32)
+    def build(cls, blocks: Sequence[NDArray] | NDArray, *, kind: str | None = None) -> Index:
+        """An index over the rows of ``blocks`` (arrays (n_i, D) in order, e.g. each shard's
+        descriptors, memory-mapped: one block at a time is read, so memory stays bounded by the
+        index itself): exact up to :data:`EXACT_UP_TO` rows, else IVF."""
+        parts = [blocks] if isinstance(blocks, np.ndarray) else list(blocks)
+        n = sum(len(b) for b in parts)
+        d = parts[0].shape[1]
         faiss = _faiss()
-        kind = kind or ("exact" if v.shape[0] <= EXACT_UP_TO or faiss is None else "ivf")
+        kind = kind or ("exact" if n <= EXACT_UP_TO or faiss is None else "ivf")
         if kind == "exact":
             if faiss is None:
-                return cls("exact", v)
-            flat = faiss.IndexFlatL2(v.shape[1])
-            flat.add(v)
+                return cls("exact", np.concatenate([_f32(b) for b in parts]))
+            flat = faiss.IndexFlatL2(d)
+            for b in parts:
+                flat.add(_f32(b))
             return cls("exact", flat)
         if faiss is None:
             raise ImportError("an IVF index needs faiss (pip install faiss-cpu)")
-        n, d = v.shape
         nlist = int(np.clip(2 ** round(np.log2(2.0 * np.sqrt(n))), 16, 65536))
-        train = v[np.linspace(0, n - 1, min(n, 40 * nlist)).astype(np.int64)]
+        train = _rows(parts, np.linspace(0, n - 1, min(n, 40 * nlist)).astype(np.int64))
         quantizer = faiss.IndexFlatL2(d)
         ivf = faiss.IndexIVFFlat(quantizer, d, nlist)
         ivf.cp.seed = _SEED
         ivf.train(train)
-        for start in range(0, n, 1 << 20):
-            ivf.add(v[start : start + (1 << 20)])
+        for b in parts:
+            ivf.add(_f32(b))
         return cls("ivf", ivf, nprobe=1)
 
-    def tune(self, vectors: NDArray, queries: NDArray, variants: int, k: int = 10) -> float:
+    def tune(
+        self, blocks: Sequence[NDArray] | NDArray, queries: NDArray, variants: int, k: int = 10
+    ) -> float:
         """Choose the least power-of-two ``nprobe`` whose recall@k (over variant sets of
-        ``queries``, (Q·V, D)) against the exact search reaches :data:`TARGET_RECALL`;
-        returns that recall (1.0 for an exact index)."""
+        ``queries``, (Q·V, D)) against the exact search over ``blocks`` (as :meth:`build`)
+        reaches :data:`TARGET_RECALL`; returns that recall (1.0 for an exact index)."""
         if self.kind == "exact":
             return 1.0
-        faiss = _faiss()
-        if faiss is not None:
-            flat = faiss.IndexFlatL2(vectors.shape[1])
-            flat.add(np.ascontiguousarray(vectors, dtype=np.float32))
-            d, i = flat.search(np.ascontiguousarray(queries, dtype=np.float32), k)
-            del flat
-        else:
-            d, i = exact_search(vectors, queries, k)
-        truth = merge_variants(d, i, variants, k)[1]
+        truth = merge_variants(*exact_blocks(blocks, queries, k), variants, k)[1]
         nlist = self.handle.nlist
         probe, recall = 1, 0.0
         while True:
@@ -178,7 +221,8 @@ class Index:
         faiss = _faiss()
         if faiss is None or isinstance(self.handle, np.ndarray):
             return  # the NumPy search reads the shards instead
-        write_atomic(path, faiss.serialize_index(self.handle).tobytes())
+        with atomic_path(path) as tmp:
+            faiss.write_index(self.handle, str(tmp))
 
     @classmethod
     def load(cls, path: Path, kind: str, nprobe: int, vectors: NDArray | None = None) -> Index:
@@ -187,5 +231,4 @@ class Index:
             if vectors is None:
                 raise ImportError("this atlas's index needs faiss (pip install faiss-cpu)")
             return cls("exact", np.ascontiguousarray(vectors, dtype=np.float32))
-        data = np.frombuffer(Path(path).read_bytes(), dtype=np.uint8)
-        return cls(kind, faiss.deserialize_index(data), nprobe=nprobe)
+        return cls(kind, faiss.read_index(str(path)), nprobe=nprobe)

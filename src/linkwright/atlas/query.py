@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
+from scipy.spatial import cKDTree
 
 from linkwright.atlas.atlas import Atlas
 from linkwright.atlas.families import curves, describe_variants
@@ -36,6 +37,7 @@ Array = NDArray[np.float64]
 
 RANK_SAMPLES = 256
 REFINED = 3
+DISTANCE_SAMPLES = 1024
 """How many of the best matches ``refine`` optimises."""
 
 
@@ -152,7 +154,7 @@ def _distance(points: Array, curve: Array) -> float:
     the foot on either segment beside the point's nearest vertex (the curve is sampled finely
     enough that the nearest segment is one of those two)."""
     m = len(curve)
-    near = np.argmin(np.sum((points[:, None, :] - curve[None]) ** 2, axis=-1), axis=1)
+    near = cKDTree(curve).query(points)[1]
     best = np.full(len(points), np.inf)
     for first in (near - 1, near):
         a, b = curve[first % m], curve[(first + 1) % m]
@@ -231,19 +233,28 @@ def query(
     fit = _aligned(model.space, curves(family, designs, RANK_SAMPLES), q)
     order = np.argsort(np.where(np.isfinite(fit.error), fit.error, np.inf), kind="stable")[:top]
     size = _size(model.space, q)
+    # The chosen curves, densely, carried by their transforms: what each placed linkage traces.
+    dense = curves(family, {n: v[order] for n, v in designs.items()}, DISTANCE_SAMPLES)
+    is_sphere = model.space == "sphere"
+    if is_sphere:
+        dense = np.einsum("kij,knj->kni", fit.rotation[order], dense)
+    else:
+        c, s = np.cos(fit.rotation[order]), np.sin(fit.rotation[order])
+        turn = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+        dense = fit.scale[order, None, None] * np.einsum("kij,knj->kni", turn, dense)
+        dense = dense + fit.translation[order][:, None, :]
     matches: list[Match] = []
     for rank, k in enumerate(order):
         design = {name: float(v[k]) for name, v in designs.items()}
         params = _placed_params(family, design, fit, int(k))
         user, named = _mechanisms(family, params)
-        is_sphere = model.space == "sphere"
         matches.append(
             Match(
                 atlas_id=int(ids[k]),
                 mechanism=user,
                 named=named,
                 error=float(fit.error[k]),
-                distance=_distance(q, _traced(user, 1024)),
+                distance=_distance(q, dense[rank]),
                 scale=1.0 if is_sphere else float(fit.scale[k]),
                 rotation=np.array(fit.rotation[k]) if is_sphere else float(fit.rotation[k]),
                 translation=None if is_sphere else np.array(fit.translation[k]),
@@ -343,8 +354,8 @@ def _refine(
             return None
 
     # Each point's input starts at its nearest sample of the match's curve.
-    theta_grid = np.linspace(0.0, 2.0 * np.pi, 1024, endpoint=False)
-    dense = _traced(m.mechanism, 1024)
+    theta_grid = np.linspace(0.0, 2.0 * np.pi, DISTANCE_SAMPLES, endpoint=False)
+    dense = _traced(m.mechanism, DISTANCE_SAMPLES)
     near = np.argmin(np.sum((q[:, None, :] - dense[None]) ** 2, axis=-1), axis=1)
     n_par, n_pts = len(names), len(q)
     z0 = np.concatenate([x0, theta_grid[near]])
@@ -376,7 +387,7 @@ def _refine(
     user = mechanism(z[:n_par])
     if user is None:
         return None
-    traced = _traced(user, 1024)
+    traced = _traced(user, DISTANCE_SAMPLES)
     if not np.all(np.isfinite(traced)):
         return None  # refined past a limit position: the input no longer turns fully
     distance = _distance(q, traced)
