@@ -61,7 +61,7 @@ class Atlas:
 
     def descriptors(self) -> NDArray[np.float32]:
         """Every entry's descriptor (N, D), read from the shards."""
-        parts = [store.read_shard(self.path, i)["descriptor"] for i in range(len(self.spec.sizes))]
+        parts = store.shard_descriptors(self.path, len(self.spec.sizes))
         return np.ascontiguousarray(np.concatenate(parts), dtype=np.float32)
 
 
@@ -88,11 +88,11 @@ def open_atlas(path: str | os.PathLike[str]) -> Atlas:
     if spec.get("family") not in FAMILIES or spec.get("format") != 1:
         raise AtlasError(f"{root}: an atlas of an unknown family or format ({spec})")
     kind, nprobe = manifest["index"]["kind"], int(manifest["index"]["nprobe"])
-    atlas = Atlas(root, manifest, Index("exact", np.zeros((0, 1), np.float32)))
     try:
         index = Index.load(root / store.INDEX, kind, nprobe, None)
     except ImportError:
-        index = Index.load(root / store.INDEX, kind, nprobe, atlas.descriptors())
+        blocks = store.shard_descriptors(root, len(manifest["shards"]))
+        index = Index.load(root / store.INDEX, kind, nprobe, np.concatenate(blocks))
     return Atlas(root, manifest, index)
 
 

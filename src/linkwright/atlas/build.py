@@ -158,20 +158,21 @@ def _on_dask(
         window = 2 * max(1, sum(client.nthreads().values()))
         pending = list(todo)
         running = as_completed()
-        for _ in range(min(window, len(pending))):
+
+        def submit_next() -> None:
             i = pending.pop(0)
             running.add(
                 client.submit(make_shard, spec, i, key=f"linkwright-shard-{i}-{os.getpid()}")
             )
+
+        for _ in range(min(window, len(pending))):
+            submit_next()
         for future in running:
             table = future.result()
             i = int(future.key.split("-")[2])
             future.release()
             if pending:
-                j = pending.pop(0)
-                running.add(
-                    client.submit(make_shard, spec, j, key=f"linkwright-shard-{j}-{os.getpid()}")
-                )
+                submit_next()
             yield i, table
     finally:
         client.close()
@@ -266,7 +267,7 @@ def build(
             progress(shard_weight * done_rows / spec.count)
     t_shards = time.perf_counter() - t0
 
-    blocks = [store.read_shard(root, i)["descriptor"] for i in range(len(sizes))]
+    blocks = store.shard_descriptors(root, len(sizes))
     index = Index.build(blocks)
     queries = describe_variants(
         family,

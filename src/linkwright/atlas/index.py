@@ -68,6 +68,22 @@ def merge_variants(dist: NDArray, ids: NDArray, variants: int, k: int) -> tuple[
     return out_d, out_i
 
 
+class _TopK:
+    """The k nearest so far of each query, as blocks of candidates come in (ties by id)."""
+
+    def __init__(self, queries: int, k: int) -> None:
+        self.k = k
+        self.dist = np.full((queries, 0), np.inf)
+        self.ids = np.zeros((queries, 0), dtype=np.int64)
+
+    def add(self, dist: NDArray, ids: NDArray) -> None:
+        d = np.concatenate([self.dist, dist], axis=1)
+        i = np.concatenate([self.ids, ids], axis=1)
+        order = np.lexsort((i, d), axis=1)[:, : self.k]
+        self.dist = np.take_along_axis(d, order, 1)
+        self.ids = np.take_along_axis(i, order, 1)
+
+
 def exact_search(vectors: NDArray, queries: NDArray, k: int) -> tuple[NDArray, NDArray]:
     """Squared distances and ids of the k nearest rows of ``vectors`` (N, D) to each query
     (Q, D), by brute force in float64 (ties by the smaller id).
@@ -80,20 +96,15 @@ def exact_search(vectors: NDArray, queries: NDArray, k: int) -> tuple[NDArray, N
     qv = np.asarray(queries, dtype=np.float64)
     k = min(k, v.shape[0])
     q2 = np.sum(qv * qv, 1)[:, None]
-    best_d = np.full((qv.shape[0], 0), np.inf)
-    best_i = np.zeros((qv.shape[0], 0), dtype=np.int64)
+    best = _TopK(len(qv), k)
     block = max(4096, (1 << 24) // max(1, qv.shape[0]))  # ≤ 128 MB of distances at a time
     for start in range(0, v.shape[0], block):
         part = np.asarray(v[start : start + block], dtype=np.float64)
         d = np.einsum("ij,ij->i", part, part)[None, :] - 2.0 * qv @ part.T + q2
         take = min(k, part.shape[0])
         idx = np.argpartition(d, take - 1, axis=1)[:, :take]
-        best_d = np.concatenate([best_d, np.take_along_axis(d, idx, 1)], axis=1)
-        best_i = np.concatenate([best_i, idx + start], axis=1)
-        order = np.lexsort((best_i, best_d), axis=1)[:, :k]
-        best_d = np.take_along_axis(best_d, order, 1)
-        best_i = np.take_along_axis(best_i, order, 1)
-    return np.maximum(best_d, 0.0), best_i
+        best.add(np.take_along_axis(d, idx, 1), idx + start)
+    return np.maximum(best.dist, 0.0), best.ids
 
 
 def _f32(block: NDArray) -> NDArray[np.float32]:
@@ -120,8 +131,7 @@ def exact_blocks(
     parts = [blocks] if isinstance(blocks, np.ndarray) else list(blocks)
     faiss = _faiss()
     q = _f32(queries)
-    best_d = np.full((len(q), 0), np.inf)
-    best_i = np.zeros((len(q), 0), dtype=np.int64)
+    best = _TopK(len(q), k)
     start = 0
     for b in parts:
         if faiss is not None:
@@ -130,13 +140,9 @@ def exact_blocks(
             d, i = flat.search(q, min(k, len(b)))
         else:
             d, i = exact_search(b, q, k)
-        best_d = np.concatenate([best_d, d], axis=1)
-        best_i = np.concatenate([best_i, i + start], axis=1)
-        order = np.lexsort((best_i, best_d), axis=1)[:, :k]
-        best_d = np.take_along_axis(best_d, order, 1)
-        best_i = np.take_along_axis(best_i, order, 1)
+        best.add(d, i + start)
         start += len(b)
-    return best_d, best_i
+    return best.dist, best.ids
 
 
 def recall_at(found: NDArray, truth: NDArray) -> float:

@@ -181,7 +181,6 @@ def query(
     refine: bool = False,
     tolerance: float = 0.001,
     budget: float = 5.0,
-    seed: int = 0,
     progress: Callable[[float], None] | None = None,
 ) -> list[Match]:
     """The ``top`` atlas entries whose curves best match the closed curve through ``points``,
@@ -196,12 +195,11 @@ def query(
         last point joins the first.
     top : matches returned.
     candidates : entries taken from the index and re-ranked; default max(50, 10·top).
-    refine : optimise the best :data:`REFINED` matches locally.
+    refine : optimise the best :data:`REFINED` matches locally (deterministically).
     tolerance : refinement stops once the RMS distance from the query's points to the curve is
         at most this fraction of the query's size (its RMS radius; on the sphere its RMS chord
         from its mean direction).
     budget : seconds for each refinement.
-    seed : seeds the refinement (same seed, same result unless the budget cuts it short).
     progress : called with the fraction done, in [0, 1].
 
     Raises
@@ -267,7 +265,7 @@ def query(
     if refine:
         chosen = matches[:REFINED]
         for i, m in enumerate(chosen):
-            better = _refine(family, q, m, size, tolerance, budget, seed)
+            better = _refine(family, q, m, size, tolerance, budget)
             if better is not None:
                 matches[i] = better
             if progress:
@@ -308,14 +306,13 @@ def _size(space: str, q: Array) -> float:
 
 
 def _refine(
-    family: str, q: Array, m: Match, size: float, tolerance: float, budget: float, seed: int
+    family: str, q: Array, m: Match, size: float, tolerance: float, budget: float
 ) -> Match | None:
     """Least squares from the match: its parameters and one input per query point together,
     residuals P(θ_i) − q_i, so the optimum puts each θ_i at its point's foot on the curve and
     minimises the RMS distance from the points to the curve. Lengths move as logarithms (they
     stay positive), arcs within (0, π); the sphere's pose as a small rotation after the
     match's."""
-    del seed  # the refinement is deterministic
     model = MODELS[family]
     p0 = dict(m.params)
     sphere = model.space == "sphere"

@@ -36,6 +36,7 @@ __all__ = [
     "finished_shards",
     "read_json",
     "read_shard",
+    "shard_descriptors",
     "shard_name",
     "shard_table",
     "write_atomic",
@@ -175,3 +176,8 @@ def read_shard(directory: Path, index: int, mmap: bool = True) -> np.ndarray:
         return np.load(path, mmap_mode="r" if mmap else None, allow_pickle=False)
     except FileNotFoundError:
         raise AtlasStoreError(f"{path}: missing shard (rebuild or resume the atlas)") from None
+
+
+def shard_descriptors(directory: Path, shards: int) -> list[np.ndarray]:
+    """Each shard's descriptors (memory-mapped), in order: the blocks of the atlas's index."""
+    return [read_shard(directory, i)["descriptor"] for i in range(shards)]
