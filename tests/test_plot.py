@@ -87,7 +87,10 @@ def test_coupler_curves_are_the_circuits_of_both_assembly_modes(figures, name):
         close_up(xy[:-1], expected)
         close_up(xy[-1], xy[0])  # drawn closed
     assert ax.get_aspect() == 1.0
-    assert ax.get_legend() is not None
+    # The legend sits under the drawing, where it cannot hide a curve.
+    (legend,) = figures[name][0].legends
+    assert {"assembly +1", f"assembly {MINUS}1"} <= {t.get_text() for t in legend.get_texts()}
+    assert legend.get_window_extent().y1 <= ax.get_window_extent().y0
     assert figures[name][0].get_suptitle().endswith(name)
 
 
@@ -255,9 +258,12 @@ def test_slider_diagram_shows_slider_position(figures):
     assert gamma.max() == pytest.approx(90 + half, abs=1e-6)
 
 
-def test_save_figure_rejects_other_formats(tmp_path):
-    with pytest.raises(ValueError, match=r"\.png or \.svg"):
-        save_figure(Figure(), tmp_path / "picture.pdf")
+def test_save_figure_writes_pdf_and_rejects_other_formats(tmp_path):
+    fig = plot_curves(MECHANISMS["crank_rocker"], samples=36)
+    pdf = save_figure(fig, tmp_path / "picture.pdf")
+    assert pdf.read_bytes().startswith(b"%PDF-")
+    with pytest.raises(ValueError, match=r"\.png, \.svg or \.pdf"):
+        save_figure(Figure(), tmp_path / "picture.jpg")
 
 
 def test_batches_are_refused():

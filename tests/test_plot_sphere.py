@@ -259,3 +259,22 @@ def test_great_arc_is_vectorised_and_handles_equal_ends():
     assert pts.shape == (2, 5, 3)
     np.testing.assert_allclose(pts[0, 2], [math.sqrt(0.5), math.sqrt(0.5), 0], atol=1e-15)
     np.testing.assert_array_equal(pts[1], np.tile([0, 0, 1.0], (5, 1)))
+
+
+def test_annotated_view_draws_both_modes_and_marks_dead_centres():
+    # Seen from +X with +Z up the page shows (y, z); the dead centres' markers are P where the
+    # crank and coupler are in line: arc A0B = 45° ± 20° (found here on solve()'s positions).
+    fig = plot_spherical_linkage(FOURBAR, samples=N, view=[1, 0, 0], up=[0, 0, 1], annotate=True)
+    ax = fig.axes[0]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"assembly +1", "assembly \N{MINUS SIGN}1", "dead centres (output stationary)"} <= set(
+        legend
+    )
+    (dead,) = [ln for ln in ax.lines if ln.get_label() == "dead centres (output stationary)"]
+    thetas = np.linspace(-np.pi, np.pi, 20001)
+    pos = solve(FOURBAR, thetas, order=0).positions
+    arc = np.degrees(np.arccos(np.clip(np.sum(pos["A0"] * pos["B"], axis=1), -1, 1)))
+    for target in (25.0, 65.0):
+        i = int(np.argmin(np.abs(arc - target)))
+        p = pos["P"][i]
+        assert np.min(np.hypot(*(dead.get_xydata() - [p[1], p[2]]).T)) < 1e-3

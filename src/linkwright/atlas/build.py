@@ -289,6 +289,7 @@ def build(
             "kind": index.kind,
             "nlist": int(getattr(index.handle, "nlist", 0)),
             "nprobe": index.nprobe,
+            "storage": index.storage,
             "recall_at_10": recall,
             "tuning_queries": TUNING_QUERIES,
         },

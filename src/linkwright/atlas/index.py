@@ -8,7 +8,10 @@ Up to :data:`EXACT_UP_TO` entries the search is exact (FAISS ``IndexFlatL2``, or
 FAISS is not installed). Beyond, an ``IndexIVFFlat`` (Jégou, Douze and Schmid's inverted file
 with exact distances in the probed lists) with about 2√N lists, trained on an evenly spread
 subset, and its ``nprobe`` chosen at build time as the least power of two whose recall@10
-against the exact search reaches :data:`TARGET_RECALL` on held-out queries.
+against the exact search reaches :data:`TARGET_RECALL` on held-out queries. From
+:data:`HALF_PRECISION_FROM` entries the inverted lists hold the descriptors in float16
+(``IndexIVFScalarQuantizer``, ``QT_fp16``): half the memory (10 GB rather than 20 GB for 10^8
+curves of 51 numbers), at a recall the tuning measures like any other.
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from linkwright.atlas.store import atomic_path
 
 __all__ = [
     "EXACT_UP_TO",
+    "HALF_PRECISION_FROM",
     "TARGET_RECALL",
     "Index",
     "exact_blocks",
@@ -35,6 +39,7 @@ __all__ = [
 ]
 
 EXACT_UP_TO = 200_000
+HALF_PRECISION_FROM = 30_000_000
 TARGET_RECALL = 0.97
 _SEED = 1234
 
@@ -162,6 +167,11 @@ class Index:
     nprobe: int = 0
 
     @property
+    def storage(self) -> str:
+        """How the index holds the descriptors: "float16" or "float32"."""
+        return "float16" if hasattr(self.handle, "sq") else "float32"
+
+    @property
     def size(self) -> int:
         return int(self.handle.ntotal) if hasattr(self.handle, "ntotal") else len(self.handle)
 
@@ -187,7 +197,13 @@ class Index:
         nlist = int(np.clip(2 ** round(np.log2(2.0 * np.sqrt(n))), 16, 65536))
         train = _rows(parts, np.linspace(0, n - 1, min(n, 40 * nlist)).astype(np.int64))
         quantizer = faiss.IndexFlatL2(d)
-        ivf = faiss.IndexIVFFlat(quantizer, d, nlist)
+        ivf = (
+            faiss.IndexIVFFlat(quantizer, d, nlist)
+            if n < HALF_PRECISION_FROM
+            else faiss.IndexIVFScalarQuantizer(
+                quantizer, d, nlist, faiss.ScalarQuantizer.QT_fp16, faiss.METRIC_L2
+            )
+        )
         ivf.cp.seed = _SEED
         ivf.train(train)
         for b in parts:

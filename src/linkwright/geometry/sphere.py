@@ -15,12 +15,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "ProjectionError",
     "angle_at",
     "arc",
     "cross",
     "dot",
     "frame_error",
     "gram",
+    "lambert_azimuthal",
+    "map_frame",
     "norm",
     "point_at",
     "rotate",
@@ -193,3 +196,119 @@ def frame_error(
     True
     """
     return norm(point - point_at(origin, toward, length, angle))
+
+
+class ProjectionError(ValueError):
+    """A direction that a map projection cannot place (zero, infinite, or the antipode)."""
+
+
+_X_AXIS = np.array([1.0, 0.0, 0.0])
+_Y_AXIS = np.array([0.0, 1.0, 0.0])
+_Z_AXIS = np.array([0.0, 0.0, 1.0])
+
+
+def _direction(v: ArrayLike, name: str) -> Array:
+    try:
+        arr = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ProjectionError(f"{name}: must be a 3-vector (or an array of them)") from None
+    if arr.ndim == 0 or arr.shape[-1] != 3:
+        raise ProjectionError(f"{name}: must have a last axis of length 3, got shape {arr.shape}")
+    if np.any(np.isinf(arr)):
+        raise ProjectionError(f"{name}: must not be infinite")
+    length = norm(arr)
+    if np.any(length == 0):
+        raise ProjectionError(f"{name}: the zero vector has no direction")
+    return arr / length[..., None]
+
+
+def map_frame(centre: ArrayLike, north: ArrayLike | None = None) -> tuple[Array, Array]:
+    """(east, north) unit vectors of a map's tangent plane at ``centre``, seen from outside.
+
+    North is the part of ``north`` (default +Z) normal to the centre; where that vanishes (a map
+    centred on the pole of the hint) +Y, or +Z for an explicit hint, stands in. East = north ×
+    centre, so the map is seen from outside the sphere.
+
+    >>> east, up = map_frame([1.0, 0.0, 0.0])
+    >>> east, up
+    (array([0., 1., 0.]), array([0., 0., 1.]))
+    """
+    c = _direction(centre, "centre")
+    if c.shape != (3,):
+        raise ProjectionError(f"centre: must be one 3-vector, got shape {c.shape}")
+    hint = _Z_AXIS if north is None else _direction(north, "north")
+    if hint.shape != (3,):
+        raise ProjectionError(f"north: must be one 3-vector, got shape {hint.shape}")
+    if north is not None and norm(cross(hint, c)) < 1e-9:
+        raise ProjectionError("north: must not lie along the centre")
+    n = hint - (hint @ c) * c
+    if norm(n) < 1e-9:
+        alt = _Y_AXIS if north is None else (_Z_AXIS if abs(c[2]) < 0.9 else _Y_AXIS)
+        n = alt - (alt @ c) * c
+    n = n / norm(n)
+    return cross(n, c), n
+
+
+def lambert_azimuthal(
+    points: ArrayLike, centre: ArrayLike, *, north: ArrayLike | None = None
+) -> Array:
+    """Lambert azimuthal equal-area projection of directions onto the plane of a map.
+
+    The map is centred on ``centre`` and seen from outside the sphere, ``north`` drawn up
+    (:func:`map_frame`). A direction p at arc δ from the centre goes to distance 2 sin(δ/2)
+    from the origin, along its bearing: with E, N the map's east and north unit vectors,
+    ``x = k p·E``, ``y = k p·N`` with ``k = √(2 / (1 + p·c))`` (Snyder, *Map Projections: A
+    Working Manual*, USGS Professional Paper 1395, 1987, eqs. 24-2 to 24-4, in vector form).
+    Areas on the unit sphere are kept: a region of solid angle Ω covers area Ω on the map, so
+    a curve's map shows how much of the sphere it encloses; shapes are sheared away from the
+    centre.
+
+    Parameters
+    ----------
+    points : array_like, shape (..., 3)
+        Directions (lengths ignored); rows holding NaN (a linkage not assembled) map to NaN.
+    centre : array_like, shape (3,)
+        The direction at the map's origin.
+    north : array_like, shape (3,), optional
+        The direction drawn upwards (its part normal to ``centre``); default +Z.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2)
+        Map coordinates, in units of the sphere's radius (the whole sphere fills the disc of
+        radius 2).
+
+    Raises
+    ------
+    ProjectionError
+        For a point at the antipode of the centre (it maps to the whole rim, not one point), a
+        zero or infinite vector, or a ``north`` along the centre.
+
+    Examples
+    --------
+    Centred on +X with +Z up: +Y is east, 90° away at √2; the centre maps to the origin.
+
+    >>> lambert_azimuthal([[1, 0, 0], [0, 1, 0], [0, 0, 1]], [1, 0, 0]).round(6) + 0.0
+    array([[0.      , 0.      ],
+           [1.414214, 0.      ],
+           [0.      , 1.414214]])
+
+    The antipode has no one place on the map:
+
+    >>> lambert_azimuthal([[-1, 0, 0]], [1, 0, 0])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    linkwright.geometry.sphere.ProjectionError: lambert_azimuthal: a point lies at the antipode ...
+    """
+    east, up = map_frame(centre, north)
+    c = cross(east, up)  # the unit centre: east = north × centre
+    p = _direction(points, "points")
+    with np.errstate(invalid="ignore"):
+        one_plus = 1.0 + p @ c
+        if np.any(one_plus < 1e-12):
+            raise ProjectionError(
+                "lambert_azimuthal: a point lies at the antipode of the centre, which maps to "
+                "the whole rim of the map"
+            )
+        k = np.sqrt(2.0 / one_plus)
+    return np.stack((k * (p @ east), k * (p @ up)), axis=-1)

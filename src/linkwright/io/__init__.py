@@ -1,4 +1,5 @@
-"""Reading and writing mechanism documents (TOML and JSON), and the bundled examples."""
+"""Reading and writing mechanism documents (TOML and JSON), the bundled examples, and exports
+(CSV paths, SVG and DXF drawings)."""
 
 from linkwright.io.documents import (
     FAMILY_SPECS,
@@ -15,19 +16,43 @@ from linkwright.io.documents import (
     parse_document,
     save_document,
 )
+from linkwright.io.exports import (
+    FORMATS,
+    INSUNITS,
+    ExportError,
+    Guide,
+    Topology,
+    export,
+    export_csv,
+    export_dxf,
+    export_svg,
+    joint_paths,
+    topology,
+)
 
 __all__ = [
     "FAMILY_SPECS",
     "FORMAT",
+    "FORMATS",
+    "INSUNITS",
     "Document",
     "DocumentError",
+    "ExportError",
     "FamilySpec",
     "FieldSpec",
+    "Guide",
+    "Topology",
     "document_to_dict",
+    "export",
+    "export_csv",
+    "export_dxf",
+    "export_svg",
+    "joint_paths",
     "list_examples",
     "load_document",
     "load_example",
     "mechanism_to_dict",
     "parse_document",
     "save_document",
+    "topology",
 ]

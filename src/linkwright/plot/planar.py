@@ -5,7 +5,11 @@ attached, and never touches pyplot's global state: the functions work headless a
 threads at once.
 
 The transmission angle γ is :func:`linkwright.analysis.transmission_angle` on the sampled
-motion; the extremes marked are the sampled ones (the analysis finds the exact values).
+motion; the extremes :func:`plot_curves` marks are the exact ones of
+:func:`linkwright.analysis.transmission_extremes`, and its dead centres (where the output stops:
+crank and coupler in line, the slider at the ends of its stroke) the exact output extremes of
+:func:`linkwright.analysis.output_extremes` (see :mod:`linkwright.plot.generic` for what every
+mark means).
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ GAMMA_COLOR = "tab:purple"
 LINK_COLOR = "0.15"
 COUPLER_FACE = "#9ecae1"
 GROUND_COLOR = "0.35"
+MIXED_NOTE_COLOR = "0.2"
 
 
 # --------------------------------------------------------------------------------------------
@@ -85,8 +90,8 @@ def _fmt(x: float) -> str:
 
 
 def _deg(x: float) -> str:
-    """An angle in degrees for a caption: one decimal, true minus."""
-    return f"{float(x):.1f}".replace("-", MINUS)
+    """An angle in degrees for a caption: one decimal, true minus (never "−0.0")."""
+    return f"{round(float(x), 1) + 0.0:.1f}".replace("-", MINUS)
 
 
 def _dimensions(mechanism: Mechanism) -> str:
@@ -308,9 +313,15 @@ def _label_joints(
     texts = texts or {}
     distance = distance or {}
     for name, p in pts.items():
-        angles = sorted(
-            math.atan2(t[1], t[0]) for t in taken.get(name, []) if float(np.hypot(*t)) > 1e-12
-        )
+        angles: list[float] = []
+        for t in taken.get(name, []):
+            if float(np.hypot(*t)) <= 1e-12:
+                continue
+            a = math.atan2(t[1], t[0])
+            # Two links along one line (a point on a link's extension) leave one direction.
+            if all(abs((a - b + math.pi) % (2.0 * math.pi) - math.pi) > 1e-9 for b in angles):
+                angles.append(a)
+        angles.sort()
         if not angles:
             bisector = math.pi / 2
         else:
@@ -470,7 +481,8 @@ def draw_linkage(
         style = {"ms": 8, "mfc": "white", "mec": LINK_COLOR, "mew": 1.8, "zorder": 6}
         if name == "P":
             style.update(mfc=CURVE_COLOR, mec="white", ms=8)
-        ax.plot(*q, "o", **style)
+        # Labelled (hidden from the legend) so the drawn place can be read back.
+        ax.plot(*q, "o", label=f"_joint {name}", **style)
     taken = _incident(drawn, mechanism)
     if pose.velocities is not None and np.all(np.isfinite(pose.velocities["P"][0])):
         # The coupler curve runs through P along its velocity.
@@ -508,6 +520,8 @@ def _add_note(notes: list[_Note], xy: Array, text: str, color: str, tol: float) 
         if float(np.hypot(*(note.xy - xy))) <= tol:
             if text not in note.lines:
                 note.lines.append(text)
+                if note.color != color:
+                    note.color = MIXED_NOTE_COLOR  # one colour would claim every line
             return
     notes.append(_Note(np.asarray(xy, float), [text], color))
 
@@ -628,12 +642,34 @@ def _link_lines(pts: dict[str, Array]) -> list[Array]:
     return [np.array([pts[a], pts[b]]) for a, b in pairs if a in pts and b in pts]
 
 
-def _fit_figure(fig: Figure, ax: Axes, width: float = 8.5) -> None:
-    """Size the figure so the equal-aspect drawing fills its axes."""
+def _fit_figure(fig: Figure, ax: Axes, width: float = 8.5, *, extra: float = 0.0) -> None:
+    """Size the figure so the equal-aspect drawing fills its axes (``extra`` inches of height
+    for what sits outside it, e.g. a legend below)."""
     box = ax.dataLim
     ratio = box.height / box.width if box.width > 0 else 1.0
     ratio = min(max(ratio, 0.4), 1.1)
-    fig.set_size_inches(width, 0.84 * width * ratio + 1.6)
+    fig.set_size_inches(width, 0.84 * width * ratio + 1.6 + extra)
+
+
+LEGEND_COLUMNS = 3
+
+
+def _legend_height(count: int) -> float:
+    """Inches a legend of ``count`` entries takes below the drawing."""
+    return 0.25 * math.ceil(count / LEGEND_COLUMNS) + 0.15 if count else 0.0
+
+
+def _legend_below(fig: Figure, handles: Sequence, labels: Sequence[str]) -> None:
+    """The figure's legend under the drawing, where it cannot hide a curve."""
+    if handles:
+        fig.legend(
+            handles,
+            labels,
+            loc="outside lower center",
+            ncols=min(LEGEND_COLUMNS, len(labels)),
+            fontsize=8.5,
+            frameon=False,
+        )
 
 
 def plot_curves(
@@ -647,9 +683,10 @@ def plot_curves(
 
     The mechanism's own assembly is drawn solid, the other dashed in another colour (where the
     input only rocks, the circuit switches branch at each limit, so both modes trace the same
-    closed curve and the two lines overlap). Limit positions of the input, and the positions of
-    P at the extremes of the transmission angle γ found on the sampled circuit, are marked and
-    annotated.
+    closed curve and the two lines overlap). On the mechanism's own circuit P is marked and
+    annotated at the input's limit positions (where the input cannot go on), at the dead
+    centres (where the output stops; the rocker, or the slider, is drawn there too) and at the
+    exact extremes of the transmission angle γ. The legend sits under the drawing.
 
     Parameters
     ----------
@@ -659,7 +696,8 @@ def plot_curves(
     samples : int, optional
         Samples per circuit.
     theta : float, optional
-        Input angle (radians) at which the linkage is drawn; default the circuit's first sample
+        Input angle (radians) at which the linkage is drawn, on the mechanism's own assembly
+        (the pose of :func:`~linkwright.mechanisms.solve`); default the circuit's first sample
         (the lower limit where the input cannot turn fully).
     title : str, optional
         Appended to the family name in the figure title.
@@ -680,6 +718,12 @@ def plot_curves(
     'Four-bar — crank-rocker'
     >>> sorted(ln.get_label() for ln in fig.axes[0].lines if ln.get_label().startswith("assembly"))
     ['assembly +1', 'assembly −1']
+
+    Its dead centres, crank and coupler in line (|A0 B| = 5 ± 1, so B is at 6 or 4 from A0):
+
+    >>> ends = next(ln for ln in fig.axes[0].lines if ln.get_label().startswith("output"))
+    >>> np.hypot(*ends.get_xydata().T).round(9)
+    array([6., 4.])
     """
     _require_single(mechanism)
     fig = new_figure((8.5, 7.0))
@@ -719,57 +763,21 @@ def plot_curves(
             )
             first = False
 
+    # Limit positions, dead centres and the exact γ extremes of the document's mode, found as
+    # for every family (linkwright.plot.generic, which builds on this module: imported here).
+    from linkwright.plot.generic import _draw_marks, _features
+
     notes: list[_Note] = []
-    limit_pts: list[Array] = []
-    gamma_pts: list[tuple[Array, str]] = []
-    for c in mine:
-        m = c.motion
-        if not c.full:
-            for i in (0, c.upper):
-                if m.valid[i]:
-                    xy = m.positions["P"][i]
-                    limit_pts.append(xy)
-                    text = f"limit θ = {_deg(math.degrees(float(m.input[i])))}°"
-                    _add_note(notes, xy, text, LIMIT_COLOR, tol)
-        gamma = _transmission_angle_deg(mechanism, m)
-        if np.isfinite(gamma).any():
-            for fn, name, marker in ((np.nanargmin, "min", "v"), (np.nanargmax, "max", "^")):
-                i = int(fn(gamma))
-                xy = m.positions["P"][i]
-                gamma_pts.append((xy, marker))
-                at = _deg(math.degrees(float(m.input[i])))
-                _add_note(notes, xy, f"γ{name} = {_deg(gamma[i])}°\n(θ = {at}°)", GAMMA_COLOR, tol)
-    if limit_pts:
-        lp = np.array(limit_pts)
-        ax.plot(
-            lp[:, 0],
-            lp[:, 1],
-            "D",
-            ms=8,
-            mfc=LIMIT_COLOR,
-            mec="white",
-            mew=1.0,
-            ls="none",
-            zorder=7,
-            label="input limit positions",
-        )
-    for j, (xy, marker) in enumerate(gamma_pts):
-        ax.plot(
-            *xy,
-            marker,
-            ms=7,
-            mfc=GAMMA_COLOR,
-            mec="white",
-            mew=0.8,
-            ls="none",
-            zorder=7.5,
-            label="P at γ extremes" if j == 0 else "_nolegend_",
-        )
+    feats = _features(mechanism, samples)
+    _draw_marks(ax, feats, "P", notes, tol, gamma_label="P at γ extremes")
 
     ref = mine[0].motion if mine else None
     if theta is None:
         theta = float(ref.input[0]) if ref is not None else 0.0
-    drawn = draw_linkage(ax, mechanism, theta, motion=ref)
+        drawn = draw_linkage(ax, mechanism, theta, motion=ref)
+    else:
+        # A chosen input is drawn on the document's own assembly, as solve() places it.
+        drawn = draw_linkage(ax, mechanism, float(theta))
 
     subtitle = _dimensions(mechanism)
     if not mine:
@@ -793,11 +801,11 @@ def plot_curves(
     ax.grid(True, lw=0.4, alpha=0.5)
     ax.set_xlabel("x")
     ax.set_ylabel("y")
-    _fit_figure(fig, ax)
     handles, labels = ax.get_legend_handles_labels()
     shown = [(h, lab) for h, lab in zip(handles, labels, strict=True) if ", circuit" not in lab]
+    _fit_figure(fig, ax, extra=_legend_height(len(shown)))
     if shown:
-        ax.legend(*zip(*shown, strict=True), loc="best", fontsize=8.5, framealpha=0.9)
+        _legend_below(fig, *zip(*shown, strict=True))
 
     # Everything drawn as a line (curves, paths, links, guide) is what the notes must not hide.
     lines = [
@@ -990,15 +998,18 @@ def plot_diagrams(mechanism: Mechanism, *, samples: int = 720, title: str | None
 # --------------------------------------------------------------------------------------------
 
 
-def save_figure(fig: Figure, path: str | os.PathLike[str]) -> Path:
-    """Write ``fig`` as PNG (150 dpi) or SVG, chosen by the file extension.
+def save_figure(fig: Figure, path: str | os.PathLike[str], *, dpi: float | None = None) -> Path:
+    """Write ``fig`` as PNG (150 dpi unless told), SVG or PDF, chosen by the file extension.
 
     Parameters
     ----------
     fig : matplotlib.figure.Figure
         The figure to write.
     path : str or os.PathLike
-        Destination ending in ``.png`` or ``.svg``; missing parent folders are created.
+        Destination ending in ``.png``, ``.svg`` or ``.pdf``; missing parent folders are
+        created.
+    dpi : float, optional
+        Resolution of a PNG (default 150); ignored by the vector formats.
 
     Returns
     -------
@@ -1008,13 +1019,17 @@ def save_figure(fig: Figure, path: str | os.PathLike[str]) -> Path:
     Raises
     ------
     ValueError
-        For any other extension.
+        For any other extension, or a ``dpi`` that is not a positive number.
     """
+    if dpi is not None and not (isinstance(dpi, int | float) and math.isfinite(dpi) and dpi > 0):
+        raise ValueError(f"save_figure: dpi must be a positive number, got {dpi!r}")
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix not in (".png", ".svg"):
-        raise ValueError(f"save_figure writes .png or .svg, not {path.suffix or 'no extension'!r}")
+    if suffix not in (".png", ".svg", ".pdf"):
+        raise ValueError(
+            f"save_figure writes .png, .svg or .pdf, not {path.suffix or 'no extension'!r}"
+        )
     path.parent.mkdir(parents=True, exist_ok=True)
-    kwargs = {"dpi": 150} if suffix == ".png" else {}
+    kwargs = {"dpi": 150 if dpi is None else dpi} if suffix == ".png" else {}
     fig.savefig(path, format=suffix[1:], **kwargs)
     return path

@@ -38,8 +38,31 @@ from linkwright.engine import (
     SphereRigid,
 )
 from linkwright.geometry import sphere
+from linkwright.geometry.sphere import lambert_azimuthal
 from linkwright.mechanisms import Mechanism, circuit, input_range, solve
-from linkwright.plot.planar import new_figure
+from linkwright.plot.generic import (
+    DEAD_COLOR,
+    MODE_COLORS,
+    OWN_COLOR,
+    SECOND_PATH_COLOR,
+    _family_title,
+    _Features,
+    _features,
+    _input_status,
+    _letter,
+    _mode_curves,
+    _never_modes,
+)
+from linkwright.plot.planar import (
+    GAMMA_COLOR,
+    LIMIT_COLOR,
+    _add_note,
+    _deg,
+    _label_joints,
+    _Note,
+    _place_notes,
+    new_figure,
+)
 
 __all__ = [
     "SpherePlotError",
@@ -48,6 +71,7 @@ __all__ = [
     "great_arc",
     "plot_spherical_curves",
     "plot_spherical_linkage",
+    "plot_spherical_mechanism",
     "stroke",
 ]
 
@@ -553,18 +577,6 @@ def _upright(n: Array) -> Array:
     return n
 
 
-def _deg(x: float) -> str:
-    return f"{x:.1f}".replace("-", MINUS)
-
-
-def _input_status(arcs: InputArcs) -> str:
-    if bool(arcs.full):
-        return "input turns fully"
-    lo, hi = np.degrees(arcs.lo[np.isfinite(arcs.lo)]), np.degrees(arcs.hi[np.isfinite(arcs.hi)])
-    spans = ", ".join(f"[{_deg(a)}°, {_deg(b)}°]" for a, b in zip(lo, hi, strict=True))
-    return f"input rocks over {spans}"
-
-
 def plot_spherical_linkage(
     mechanism: Mechanism,
     *,
@@ -575,6 +587,7 @@ def plot_spherical_linkage(
     title: str | None = None,
     extra_curves: list[tuple[str, ArrayLike]] | None = None,
     ax: Axes | None = None,
+    annotate: bool = False,
 ) -> Figure:
     """A spherical linkage at one pose, with the closed paths of its traced joints.
 
@@ -605,6 +618,10 @@ def plot_spherical_linkage(
         unit vectors, NaN rows break the line.
     ax : matplotlib.axes.Axes, optional
         Draw into this axes; a new figure is made otherwise.
+    annotate : bool
+        Also draw the first traced joint's path in every other assembly mode (dashed, named in
+        the legend), and mark the dead centres (the output link drawn dashed there) and the
+        transmission-angle extremes, as :mod:`linkwright.plot.generic` defines them.
 
     Returns
     -------
@@ -637,32 +654,15 @@ def plot_spherical_linkage(
     cannot be assembled at any input: only the ground pivots are drawn
     """
     _require_sphere(mechanism)
-    ground = _ground(mechanism)
     extra = [(str(label), _check_curve(str(label), pts)) for label, pts in extra_curves or []]
-    arcs, circuits = _circuits(mechanism, samples)
-    pivots = np.array(list(ground.values())).reshape(-1, 3)
-    eye = _default_view(mechanism, circuits) if view is None else np.ones(3)
-    if up is None:
-        # The frame's great circle drawn level: the frame reads like a drawing board.
-        up = _upright(_fit_normal(pivots, _mean_direction(pivots, eye / sphere.norm(eye))))
-    cam = _view(view, up, eye)
+    feats = _features(mechanism, samples, every=annotate, marks=annotate)
     fig = ax.figure if ax is not None else new_figure((6.4, 6.6))
     ax = ax or fig.add_subplot()
-    marked = [pivots]
-    if circuits:
-        marked.append(np.array([p[0] for p in circuits[0].positions.values()]))
-    _backdrop(ax, cam, avoid=np.concatenate(marked))
-    _frame(ax, cam, ground)
-    _seen_from(ax, cam)
-    for i, (label, p) in enumerate(extra):
-        near, far = cam.split(p)
-        color = CURVES[(i + len(mechanism.plan.traced)) % len(CURVES)]
-        ax.plot(*near.T, color=color, lw=1.4, ls=(0, (1, 1.5)), label=label, zorder=3.0)
-        ax.plot(*far.T, color=color, lw=1.0, ls=(0, (1, 3)), alpha=BACK_ALPHA, zorder=2.0)
     head = title or mechanism.family
-    if not circuits:
-        for name, p in ground.items():
-            _joint(ax, cam, name, p, ground=True)
+    _, pose, theta = _sphere_panel(
+        ax, mechanism, feats, at=at, view=view, up=up, extra=extra, annotate=annotate
+    )
+    if not feats.own.circuits:
         ax.set_title(
             f"{head}\ncannot be assembled at any input: only the ground pivots are drawn",
             fontsize=10,
@@ -670,43 +670,441 @@ def plot_spherical_linkage(
         if extra:
             ax.legend(loc="lower right", fontsize=7)
         return fig
-    for k, motion in enumerate(circuits):
-        for i, joint in enumerate(mechanism.plan.traced):
-            p = motion.positions[joint]
-            closed = np.concatenate((p, p[:1]))
-            label = f"path of {joint}" + (f" (circuit {k + 1})" if k else "")
-            stroke(ax, cam, closed, color=CURVES[i % len(CURVES)], lw=1.4, label=label, z=3.0)
-        limits = np.zeros(motion.shape, dtype=bool)
-        for b in motion.branches.values():
-            limits |= b != np.roll(b, 1, -1)
-        if limits.any():
-            pts = motion.positions[mechanism.plan.traced[0]][limits]
-            ax.plot(
-                *cam.xy(pts).T,
-                "x",
-                color="k",
-                ms=6,
-                zorder=6,
-                label="limit positions" if k == 0 else None,
-            )
-    if at is None:
-        pose = {name: p[0] for name, p in circuits[0].positions.items()}
-        theta = float(circuits[0].input[0])
-        placed = True
-    else:
-        one = solve(mechanism, [float(at)], order=0)
-        pose = {name: p[0] for name, p in one.positions.items()}
-        theta = float(at)
-        placed = bool(one.valid[0])
-    if placed:
-        _draw_pose(ax, cam, mechanism, pose)
+    if pose is not None:
         where = f"pose at θ = {_deg(math.degrees(theta))}°"
+    else:
+        where = f"no pose: it does not assemble at θ = {_deg(math.degrees(theta))}°"
+    ax.set_title(f"{head}\n{_input_status(feats.own.arcs)}; {where}", fontsize=10)
+    ax.legend(loc="lower right", fontsize=7)
+    return fig
+
+
+def _pose_at(
+    mechanism: Mechanism, feats: _Features, at: float | None
+) -> tuple[dict[str, Array] | None, float]:
+    """The pose drawn (None where it does not assemble) and its input."""
+    if at is None:
+        first = feats.own.circuits[0]
+        return {name: p[0] for name, p in first.positions.items()}, float(first.input[0])
+    one = solve(mechanism, [float(at)], order=0)
+    if not bool(one.valid[0]):
+        return None, float(at)
+    return {name: p[0] for name, p in one.positions.items()}, float(at)
+
+
+def _sphere_panel(
+    ax: Axes,
+    mechanism: Mechanism,
+    feats: _Features,
+    *,
+    at: float | None,
+    view: ArrayLike | None,
+    up: ArrayLike | None,
+    extra: list[tuple[str, Array]],
+    annotate: bool,
+) -> tuple[SphereView, dict[str, Array] | None, float]:
+    """Draw the sphere, the paths, the marks and the pose; return the camera and the pose."""
+    ground = _ground(mechanism)
+    own = feats.own
+    circuits = list(own.circuits)
+    pivots = np.array(list(ground.values())).reshape(-1, 3)
+    eye = _default_view(mechanism, circuits) if view is None else np.ones(3)
+    if up is None:
+        # The frame's great circle drawn level: the frame reads like a drawing board.
+        up = _upright(_fit_normal(pivots, _mean_direction(pivots, eye / sphere.norm(eye))))
+    cam = _view(view, up, eye)
+    marked = [pivots]
+    if circuits:
+        marked.append(np.array([p[0] for p in circuits[0].positions.values()]))
+    _backdrop(ax, cam, avoid=np.concatenate(marked))
+    _frame(ax, cam, ground)
+    _seen_from(ax, cam)
+    traced = mechanism.plan.traced
+    for i, (label, p) in enumerate(extra):
+        near, far = cam.split(p)
+        color = CURVES[(i + len(traced)) % len(CURVES)]
+        ax.plot(*near.T, color=color, lw=1.4, ls=(0, (1, 1.5)), label=label, zorder=3.0)
+        ax.plot(*far.T, color=color, lw=1.0, ls=(0, (1, 3)), alpha=BACK_ALPHA, zorder=2.0)
+    if not circuits:
+        for name, p in ground.items():
+            _joint(ax, cam, name, p, ground=True)
+        return cam, None, 0.0 if at is None else float(at)
+    if annotate:
+        for style, label, p in _styled_curves(mechanism, feats):
+            stroke(ax, cam, p, label=label, z=3.0, **style)
+    else:
+        for k, motion in enumerate(circuits):
+            for i, joint in enumerate(traced):
+                closed = np.concatenate((motion.positions[joint], motion.positions[joint][:1]))
+                label = f"path of {joint}" + (f" (circuit {k + 1})" if k else "")
+                stroke(ax, cam, closed, color=CURVES[i % len(CURVES)], lw=1.4, label=label, z=3.0)
+    limits = feats.of("limit")
+    if limits:
+        pts = np.array([m.pose[traced[0]] for m in limits])
+        ax.plot(*cam.xy(pts).T, "x", color="k", ms=6, zorder=6, label="limit positions", ls="none")
+    if annotate:
+        for kind, marker, color, label in _MARK_STYLES:
+            marks = feats.of(kind)
+            if marks:
+                pts = np.array([m.pose[traced[0]] for m in marks])
+                ax.plot(
+                    *cam.xy(pts).T,
+                    marker,
+                    ms=7,
+                    mfc=color,
+                    mec="white",
+                    mew=0.8,
+                    ls="none",
+                    zorder=6.5,
+                    label=label,
+                )
+        if feats.output is not None:
+            pivot, out = feats.output
+            for m in feats.of("dead"):
+                e = _safe_arc(m.pose[pivot], m.pose[out]) if pivot is not None else None
+                if e is not None:
+                    stroke(ax, cam, e, color=DEAD_COLOR, lw=1.3, ls=(0, (4, 2)), z=3.5)
+    pose, theta = _pose_at(mechanism, feats, at)
+    if pose is not None:
+        _draw_pose(ax, cam, mechanism, pose)
     else:
         for name, p in ground.items():
             _joint(ax, cam, name, p, ground=True)
-        where = f"no pose: it does not assemble at θ = {_deg(math.degrees(theta))}°"
-    ax.set_title(f"{head}\n{_input_status(arcs)}; {where}", fontsize=10)
-    ax.legend(loc="lower right", fontsize=7)
+    return cam, pose, theta
+
+
+# Marker, colour and legend label of the dead centres and γ extremes on either panel.
+_MARK_STYLES = (
+    ("dead", "s", DEAD_COLOR, "dead centres (output stationary)"),
+    ("gmin", "v", GAMMA_COLOR, "γ extremes"),
+    ("gmax", "^", GAMMA_COLOR, "_γ extremes"),
+)
+
+
+def _styled_curves(
+    mechanism: Mechanism, feats: _Features
+) -> list[tuple[dict[str, object], str, Array]]:
+    """(line style, legend label, closed curve) of every drawn path, as the planar picture
+    draws them: the document's mode bold, each other mode dashed in its colour, the other
+    traced joints dotted grey on the document's mode."""
+    traced = mechanism.plan.traced
+    out: list[tuple[dict[str, object], str, Array]] = []
+    colors: dict[tuple[float, ...], str] = {}
+    palette = iter(MODE_COLORS)
+    several = len(feats.modes) > 1
+    for mode, k, p, same in _mode_curves(feats, traced[0]):
+        if mode.own:
+            style: dict[str, object] = {"color": OWN_COLOR, "lw": 2.2, "ls": "-"}
+        else:
+            if mode.signs not in colors:
+                colors[mode.signs] = next(palette, "0.5")
+            style = {"color": colors[mode.signs], "lw": 1.3, "ls": (0, (5, 3))}
+        label = mode.label if several else f"path of {traced[0]}"
+        if same is not None and not mode.own:
+            label += " (same curve)"
+        out.append((style, label if k == 0 else "_nolegend_", p))
+    for i, joint in enumerate(traced[1:]):
+        for k, motion in enumerate(feats.own.circuits):
+            p = np.concatenate((motion.positions[joint], motion.positions[joint][:1]))
+            style = {
+                "color": SECOND_PATH_COLOR if i == 0 else CURVES[i % len(CURVES)],
+                "lw": 1.1,
+                "ls": (0, (1, 1.5)),
+            }
+            out.append((style, f"path of {joint}" if k == 0 else "_nolegend_", p))
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Map projection
+# --------------------------------------------------------------------------------------------
+
+
+def _lat_lon(v: Array) -> tuple[float, float]:
+    return math.degrees(math.asin(max(-1.0, min(1.0, float(v[2]))))), math.degrees(
+        math.atan2(float(v[1]), float(v[0]))
+    )
+
+
+def _graticule(ax: Axes, centre: Array, step: float, box: tuple[float, float, float, float]):
+    """Parallels and meridians about +Z every ``step`` degrees, labelled at the map's left and
+    bottom edges; the far side (beyond 120° from the centre) is left out."""
+    x0, x1, y0, y1 = box
+    u = np.radians(np.linspace(-180.0, 180.0, 721))
+    v = np.radians(np.linspace(-90.0, 90.0, 361))
+
+    def project(pts: Array) -> Array:
+        far = pts @ centre < -0.5
+        pts = np.where(far[:, None], np.nan, pts)
+        return lambert_azimuthal(pts, centre)
+
+    def inside(xy: Array) -> Array:
+        return (xy[:, 0] > x0) & (xy[:, 0] < x1) & (xy[:, 1] > y0) & (xy[:, 1] < y1)
+
+    style = {"color": "0.82", "lw": 0.6, "zorder": 0.5}
+    text = {"fontsize": 7, "color": "0.5", "clip_on": True, "zorder": 0.6}
+    for lat in np.arange(-90.0 + step, 90.0, step):
+        r = math.radians(lat)
+        xy = project(
+            np.stack((np.cos(r) * np.cos(u), np.cos(r) * np.sin(u), np.sin(r) + 0 * u), -1)
+        )
+        ax.plot(*xy.T, **style)
+        ok = inside(xy)
+        # Labelled only where the line meets the left edge, so labels stay in one column.
+        if ok.any() and float(np.min(xy[ok, 0])) < x0 + 0.06 * (x1 - x0):
+            i = int(np.flatnonzero(ok)[np.argmin(xy[ok, 0])])
+            if xy[i, 1] < y0 + 0.08 * (y1 - y0):  # the corner belongs to the meridians' labels
+                continue
+            label = f"lat {lat:.0f}°".replace("-", MINUS)
+            ax.text(*xy[i], label, ha="left", va="bottom", **text)
+    for lon in np.arange(-180.0, 180.0, step):
+        r = math.radians(lon)
+        xy = project(np.stack((np.cos(v) * np.cos(r), np.cos(v) * np.sin(r), np.sin(v)), -1))
+        ax.plot(*xy.T, **style)
+        ok = inside(xy)
+        if ok.any() and float(np.min(xy[ok, 1])) < y0 + 0.06 * (y1 - y0):
+            i = int(np.flatnonzero(ok)[np.argmin(xy[ok, 1])])
+            label = f"lon {lon:.0f}°".replace("-", MINUS)
+            ax.text(*xy[i], label, ha="left", va="bottom", rotation=90, **text)
+
+
+def _map_centre(mechanism: Mechanism, feats: _Features) -> Array:
+    """The normalised mean of every circuit sample of the curves drawn (the first traced
+    joint in every mode, the others in the document's), or of the ground pivots if none."""
+    traced = mechanism.plan.traced
+    samples = [c.positions[traced[0]] for mode in feats.modes for c in mode.circuits]
+    samples += [c.positions[j] for j in traced[1:] for c in feats.own.circuits]
+    pivots = np.array(list(_ground(mechanism).values())).reshape(-1, 3)
+    everything = np.concatenate(samples) if samples else np.zeros((0, 3))
+    return _mean_direction(everything, _mean_direction(pivots, _Z))
+
+
+def _map_panel(
+    ax: Axes,
+    mechanism: Mechanism,
+    feats: _Features,
+    pose: dict[str, Array] | None,
+) -> Array:
+    """The curves, pivots, marks and pose on a Lambert azimuthal equal-area map centred on the
+    curves' mean direction; returns that centre."""
+    curves = _styled_curves(mechanism, feats)
+    ground = _ground(mechanism)
+    centre = _map_centre(mechanism, feats)
+
+    def project(p: Array) -> Array:
+        return lambert_azimuthal(p, centre)
+
+    drawn: list[Array] = []
+    for style, label, p in curves:
+        xy = project(p)
+        ax.plot(*xy.T, label=label, zorder=3.6, **style)
+        drawn.append(xy)
+    traced = mechanism.plan.traced[0]
+    notes: list[_Note] = []
+    tol = 0.03
+    styles = [("limit", "D", LIMIT_COLOR, "input limit positions"), *_MARK_STYLES]
+    for kind, marker, color, label in styles:
+        marks = feats.of(kind)
+        if not marks:
+            continue
+        xy = project(np.array([m.pose[traced] for m in marks]))
+        ax.plot(
+            *xy.T, marker, ms=8, mfc=color, mec="white", mew=0.9, ls="none", zorder=7.5,
+            label=label if kind != "gmax" or not feats.of("gmin") else "_nolegend_",
+        )  # fmt: skip
+        for m, q in zip(marks, xy, strict=True):
+            _add_note(notes, q, m.text, color, tol)
+    dead = feats.of("dead")
+    if dead and feats.output is not None and feats.output[0] is not None:
+        pivot, out = feats.output
+        for m in dead:
+            e = _safe_arc(m.pose[pivot], m.pose[out])
+            if e is not None:
+                xy = project(e)
+                ax.plot(*xy.T, color=DEAD_COLOR, lw=1.3, ls=(0, (4, 2)), zorder=3.5)
+                drawn.append(xy)
+        ends = project(np.array([m.pose[out] for m in dead]))
+        ax.plot(
+            *ends.T, "s", ms=6, mfc="white", mec=DEAD_COLOR, mew=1.4, ls="none", zorder=3.55,
+            label=f"output {pivot}{out} at its dead centres",
+        )  # fmt: skip
+    for a, b in itertools.pairwise(ground.values()):
+        e = _safe_arc(a, b)
+        if e is not None:
+            ax.plot(*project(e).T, color=GROUND, lw=3.5, solid_capstyle="round", zorder=1.8)
+    pts: dict[str, Array] = dict(ground) if pose is None else dict(pose)
+    pairs, bodies = _links(mechanism)
+    if pose is not None:
+        for o, t, p in bodies:
+            edges = [_safe_arc(pose[x], pose[y]) for x, y in ((o, t), (t, p), (p, o))]
+            if all(e is not None for e in edges):
+                ring = project(np.concatenate(edges))  # type: ignore[arg-type]
+                ax.add_patch(
+                    Polygon(ring, closed=True, facecolor=BODY, edgecolor="none", alpha=0.5)
+                )
+                ax.plot(*ring.T, color=LINK, lw=1.0, zorder=4)
+                drawn.append(ring)
+        for a, b in pairs:
+            e = _safe_arc(pose[a], pose[b])
+            if e is not None:
+                xy = project(e)
+                ax.plot(*xy.T, color=LINK, lw=2.6, solid_capstyle="round", zorder=4)
+                drawn.append(xy)
+    taken: dict[str, list[Array]] = {name: [] for name in pts}
+    flat = {name: project(p) for name, p in pts.items() if np.all(np.isfinite(p))}
+    for a, b in pairs if pose is not None else []:
+        if a in flat and b in flat:
+            taken[a].append(flat[b] - flat[a])
+            taken[b].append(flat[a] - flat[b])
+    for step in mechanism.plan.steps:
+        if step.name not in flat:
+            continue
+        is_ground = isinstance(step, Fixed)
+        style = (
+            {"marker": "^", "ms": 10, "mfc": GROUND, "mec": LINK, "mew": 1.0}
+            if is_ground
+            else {"marker": "o", "ms": 7, "mfc": "white", "mec": LINK, "mew": 1.6}
+        )
+        if step.name == traced and not is_ground:
+            style.update(mfc=OWN_COLOR, mec="white")
+        ax.plot(*flat[step.name], ls="none", zorder=6, label=f"_joint {step.name}", **style)
+    _label_joints(ax, flat, taken, {n: _letter(n) for n in flat})
+    every = np.concatenate([*drawn, *(q[None] for q in flat.values())])
+    every = every[np.all(np.isfinite(every), axis=-1)]
+    lo, hi = every.min(axis=0), every.max(axis=0)
+    pad = 0.08 * float(max(hi - lo)) + 0.02
+    box = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
+    reach = max(float(np.max(np.hypot(*every.T))), 1e-3)  # map radius 2 sin(δ/2)
+    extent = math.degrees(2.0 * math.asin(min(1.0, reach / 2.0)))
+    step = 5.0 if extent < 25.0 else 10.0 if extent < 70.0 else 15.0
+    _graticule(ax, centre, step, box)
+    ax.set_xlim(box[0], box[1])
+    ax.set_ylim(box[2], box[3])
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    lat, lon = _lat_lon(centre)
+    ax.set_title(
+        "Lambert azimuthal equal-area map, centred on the curves' mean direction\n"
+        f"(lat {_deg(lat)}°, lon {_deg(lon)}°); graticule every {step:.0f}° about +Z",
+        fontsize=9.5,
+    )
+    lines = [
+        np.asarray(line.get_xydata(), float)
+        for line in ax.lines
+        if line.get_linestyle() not in ("None", "none", " ", "") and len(line.get_xydata()) > 1
+    ]
+    centre_xy = np.nanmean(drawn[0], axis=0) if drawn else np.zeros(2)
+    _place_notes(ax, notes, lines, centre_xy)
+    return centre
+
+
+def plot_spherical_mechanism(
+    mechanism: Mechanism,
+    *,
+    samples: int = 720,
+    at: float | None = None,
+    title: str | None = None,
+    view: ArrayLike | None = None,
+    up: ArrayLike | None = None,
+) -> Figure:
+    """The main picture of a spherical linkage: a 3-D view of the sphere and a map of the
+    curves, side by side.
+
+    Left, the sphere seen from outside (:func:`plot_spherical_linkage` with ``annotate``): the
+    links as great-circle arcs at the pose, the first traced joint's path in every assembly
+    mode (the document's bold), the other traced joints' paths, and the marks of
+    :mod:`linkwright.plot.generic` (limit positions, dead centres with the output link there,
+    transmission-angle extremes). Right, the same on a Lambert azimuthal equal-area map
+    (:func:`linkwright.geometry.sphere.lambert_azimuthal`, +Z up) centred on the curves' mean
+    direction (the normalised mean of every circuit sample of the curves drawn), with a
+    graticule of latitude and longitude about +Z, the frame, the ground pivots, the pose's links
+    as projected arcs and a note at each mark. One legend under both. Equal-area, so a curve's
+    map encloses as much as it does on the unit sphere.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        One spherical linkage that assembles somewhere.
+    samples : int
+        Samples per circuit.
+    at : float, optional
+        Input angle (radians) of the pose, on the document's assembly (the pose of
+        :func:`~linkwright.mechanisms.solve`); default the first sample of the first circuit.
+    title : str, optional
+        The figure's title.
+    view, up : array_like, shape (3,), optional
+        The 3-D view's direction and up (see :func:`plot_spherical_linkage`).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two axes: the sphere, then the map.
+
+    Raises
+    ------
+    SpherePlotError
+        For a planar linkage, a batch, or a linkage that cannot be assembled at any input.
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import SphericalFourBar
+    >>> fig6 = SphericalFourBar(*np.radians([40, 20, 45, 35, 50, 130]))
+    >>> fig = plot_spherical_mechanism(fig6, samples=90)
+    >>> len(fig.axes), fig.axes[1].get_title().split(",")[0]
+    (2, 'Lambert azimuthal equal-area map')
+
+    A linkage that closes nowhere has nothing to draw:
+
+    >>> plot_spherical_mechanism(SphericalFourBar(*np.radians([90, 10, 20, 30])))
+    Traceback (most recent call last):
+    ...
+    linkwright.plot.sphere.SpherePlotError: mechanism: it cannot be assembled at any input
+    """
+    _require_sphere(mechanism)
+    feats = _features(mechanism, samples)
+    if not feats.own.circuits:
+        raise SpherePlotError("mechanism: it cannot be assembled at any input")
+    fig = new_figure((14.0, 7.6))
+    left, right = fig.subplots(1, 2, width_ratios=(1.0, 1.15))
+    _, pose, theta = _sphere_panel(
+        left, mechanism, feats, at=at, view=view, up=up, extra=[], annotate=True
+    )
+    status = _input_status(feats.own.arcs)
+    where = (
+        f"pose at θ = {_deg(math.degrees(theta))}°"
+        if pose is not None
+        else f"no pose: it does not assemble at θ = {_deg(math.degrees(theta))}°"
+    )
+    lines = [f"orthographic view of the unit sphere\n{status}; {where}"]
+    if len(feats.modes) > 1:
+        lines.append("bold: the document's assembly; dashed: the others")
+    never = _never_modes(feats)
+    if never:
+        lines.append("never assembles: " + "; ".join(never))
+    if feats.output is not None and feats.of("dead") and feats.output[0] is not None:
+        lines.append(
+            f"dead centres: where the output link {feats.output[0]}{feats.output[1]} stops"
+        )
+    left.set_title("\n".join(lines), fontsize=9.5)
+    _map_panel(right, mechanism, feats, pose)
+    handles, labels = right.get_legend_handles_labels()
+    name = _family_title(mechanism)
+    head = (
+        title
+        if title and name.lower() in title.lower()
+        else (f"{name} — {title}" if title else name)
+    )
+    fig.suptitle(head, fontsize=13)
+    if handles:
+        fig.legend(
+            handles,
+            labels,
+            loc="outside lower center",
+            ncols=min(4, len(labels)),
+            fontsize=8.5,
+            frameon=False,
+        )
     return fig
 
 
@@ -767,6 +1165,7 @@ def _joint(ax: Axes, cam: SphereView, name: str, p: Array, *, ground: bool) -> N
         mec=LINK,
         alpha=alpha,
         zorder=7,
+        label=f"_joint {name}",
     )
     ax.annotate(
         name,
