@@ -21,13 +21,14 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import os
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from linkwright import files
 
 __all__ = [
     "AtlasStoreError",
@@ -62,25 +63,10 @@ def _digest_name(index: int) -> str:
     return f"shard-{index:05d}.sha256"
 
 
-@contextmanager
-def atomic_path(path: Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` to write to; on success it is flushed to disk and
-    renamed over ``path`` (atomic on POSIX), then the directory is flushed so that the rename
-    itself survives a crash. On failure the temporary file is removed."""
-    path = Path(path)
-    tmp = path.with_name(f"{_TMP}{os.getpid()}-{path.name}")
-    try:
-        yield tmp
-        with open(tmp, "rb+") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-    fd = os.open(path.parent, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
+def atomic_path(path: Path) -> AbstractContextManager[Path]:
+    """:func:`linkwright.files.atomic_path`, its temporary files named for
+    :func:`clear_partial`."""
+    return files.atomic_path(path, prefix=_TMP)
 
 
 def write_atomic(path: Path, data: bytes) -> None:

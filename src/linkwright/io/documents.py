@@ -139,13 +139,14 @@ import math
 import numbers
 import os
 import re
-import secrets
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from linkwright.files import atomic_path
 
 if TYPE_CHECKING:
     from linkwright.mechanisms import Mechanism
@@ -1310,32 +1311,8 @@ def save_document(doc: Document | Mapping[str, Any], path: str | os.PathLike[str
 
 
 def _atomic_write(path: Path, payload: bytes) -> None:
-    directory = path.parent
-    tmp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    # 0o666 through os.open lets the umask decide the mode, as for any newly created file.
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(payload)
-            fh.flush()
-            os.fsync(fh.fileno())
-        if path.exists():
-            os.chmod(tmp, path.stat().st_mode & 0o7777)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    # Make the rename itself durable; not every platform lets a directory be opened.
-    try:
-        dir_fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(dir_fd)
-    except OSError:
-        pass
-    finally:
-        os.close(dir_fd)
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(payload)
 
 
 # --------------------------------------------------------------------------------------------

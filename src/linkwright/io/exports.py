@@ -49,14 +49,12 @@ the plotting modules' link lists, extended to rigid bodies of three or more join
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import itertools
 import math
 import numbers
 import os
 import pathlib
-import tempfile
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from xml.sax.saxutils import escape, quoteattr
@@ -75,6 +73,7 @@ from linkwright.engine import (
     SphereRigid,
     Trammel,
 )
+from linkwright.files import atomic_path
 from linkwright.geometry.sphere import lambert_azimuthal, map_frame
 from linkwright.mechanisms import Mechanism, circuit, solve
 
@@ -473,23 +472,13 @@ def _target(out: str | os.PathLike[str], suffix: str | None = None) -> tuple[pat
 
 
 def _write_atomically(path: pathlib.Path, write: Callable[[pathlib.Path], None]) -> pathlib.Path:
-    """Call ``write(temporary)`` beside ``path``, then rename it over ``path``."""
+    """Call ``write(temporary)`` and put the result at ``path`` whole
+    (:func:`linkwright.files.atomic_path`)."""
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        with atomic_path(path) as temporary:
+            write(temporary)
     except OSError as exc:
         raise ExportError(f"out: cannot write {str(path)!r}: {exc.strerror or exc}") from None
-    os.close(fd)
-    temporary = pathlib.Path(tmp)
-    try:
-        write(temporary)
-        os.replace(temporary, path)
-    except BaseException as exc:
-        with contextlib.suppress(OSError):
-            temporary.unlink()
-        if isinstance(exc, OSError):
-            raise ExportError(f"out: cannot write {str(path)!r}: {exc.strerror or exc}") from None
-        raise
     return path
 
 

@@ -26,7 +26,6 @@ import contextlib
 import itertools
 import math
 import os
-import secrets
 import shutil
 import subprocess
 from collections.abc import Callable
@@ -62,6 +61,7 @@ from linkwright.engine import (
     SphereRigid,
     Trammel,
 )
+from linkwright.files import atomic_path
 from linkwright.mechanisms import Mechanism, circuit, input_range
 from linkwright.plot.sphere import (
     SpherePlotError,
@@ -908,16 +908,9 @@ def animate(
     else:
         scene = _plane_scene(mechanism, cycle, head, dpi)
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # Hidden, unique, same folder (so the rename is atomic), same suffix (ffmpeg reads it).
-    temp = path.with_name(f".{path.stem}.{secrets.token_hex(6)}.part{path.suffix}")
-    try:
+    with atomic_path(path) as temp:
         if fmt == "gif":
             _write_gif(scene, temp, fps, progress)
         else:
             _write_mp4(scene, temp, fps, progress)
-        os.replace(temp, path)
-    except BaseException:
-        temp.unlink(missing_ok=True)
-        raise
     return path
