@@ -106,11 +106,53 @@ def bench_size(n: int, workers: int, root: Path) -> dict[str, float]:
     return result
 
 
+def measure_existing(path: Path) -> None:
+    """Latency of an atlas built elsewhere (the 10^8 one: `linkwright atlas build --count
+    100000000 --scheduler ...`), its recall@10 being the one measured when it was built (exact
+    search over 10^8 rows per query is the slow part that the index exists to avoid)."""
+    t0 = time.perf_counter()
+    atlas = open_atlas(path)
+    t_open = time.perf_counter() - t0
+    manifest, figures = atlas.manifest, atlas.manifest["build"]
+    curves_q, variants = _queries(atlas.spec, QUERIES)
+    v = variants.shape[1]
+    t_index = []
+    for q in variants:
+        t = time.perf_counter()
+        atlas.index.search(q, v, 10)
+        t_index.append(time.perf_counter() - t)
+    t_query = []
+    for pts in curves_q[:30]:
+        t = time.perf_counter()
+        query(atlas, pts, top=5)
+        t_query.append(time.perf_counter() - t)
+    p50, p95 = _percentiles(t_index)
+    q50, _ = _percentiles(t_query)
+    index = manifest["index"]
+    print(f"| {atlas.count:.0e} | {figures['workers']} | "
+          f"{figures['curves_computed'] / figures['seconds_shards']:.3g} | "
+          f"{figures['seconds_total']:.0f} s | {figures['bytes'] / atlas.count * 1e6 / 1e6:.0f} | "
+          f"{index['kind']} {index['nprobe']}/{index['nlist']} ({index.get('storage', 'float32')})"
+          f" | {p50:.2f} / {p95:.2f} ms | — | — | {index['recall_at_10']:.3f} (at build) "
+          f"| {q50:.1f} ms |")  # fmt: skip
+    print(f"opened in {t_open:.1f} s")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--large", action="store_true", help="also a 1e7 atlas")
     parser.add_argument("--dir", type=Path, default=None, help="where to build (default tmp)")
+    parser.add_argument(
+        "--measure",
+        type=Path,
+        default=None,
+        metavar="ATLAS",
+        help="only time an atlas built before",
+    )
     args = parser.parse_args()
+    if args.measure is not None:
+        measure_existing(args.measure)
+        return 0
     sizes = [100_000, 1_000_000] + ([10_000_000] if args.large else [])
     print(f"# atlas benchmark — {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, Python {sys.version.split()[0]}")  # fmt: skip

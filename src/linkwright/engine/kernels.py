@@ -236,7 +236,8 @@ def _spherical_kernel(
                     * (sh * cq - ch * sq)
                     * (sh * cq + ch * sq)
                 )
-                inv_sd = 1.0 / sin_d
+                # A on B0 (sin d = 0) cannot close: bad is NaN there, and no division fails.
+                inv_sd = 1.0 / sin_d if sin_d > 0.0 else nan
                 # margin = G/(sin d sin r1)², sin² of the angle at A; sin d = 0 cannot close.
                 margin = g * inv_sd * inv_sd * inv_sr1_2
                 bad = 0.0 if (sin_d > 0.0) & (margin >= -tol) else nan
@@ -251,7 +252,7 @@ def _spherical_kernel(
                 y = sign * math.sqrt(max(g, 0.0))
                 x = cr2 - cr1 * cos_d
                 hyp = math.sqrt(x * x + y * y)
-                inv_hyp = 1.0 / hyp
+                inv_hyp = 1.0 / hyp if hyp > 0.0 else 0.0
                 cphi = x * inv_hyp if hyp > 0.0 else 1.0
                 sphi = y * inv_hyp if hyp > 0.0 else 0.0
                 bx = cr1 * ax + sr1 * (cphi * tx + sphi * nx)
@@ -319,7 +320,11 @@ def compiled(
             # Resolved as a global when numba compiles the loops.
             plain.__globals__["prange"] = numba.prange
             fastmath = {"reassoc", "contract"} if reassociate else False
-            _KERNELS[key] = numba.njit(cache=True, fastmath=fastmath, parallel=parallel)(plain)
+            # NumPy's error model: a division by zero at a sample that cannot close gives inf or
+            # NaN (masked by ``bad``) as it does interpreted, instead of raising mid-batch.
+            _KERNELS[key] = numba.njit(
+                cache=True, fastmath=fastmath, parallel=parallel, error_model="numpy"
+            )(plain)
     return _KERNELS[key]
 
 
