@@ -59,6 +59,24 @@ def _percentiles(times: list[float]) -> tuple[float, float]:
     return float(np.percentile(t, 50)), float(np.percentile(t, 95))
 
 
+def _timed_searches(
+    atlas, curves_q: np.ndarray, variants: np.ndarray, whole: int
+) -> tuple[list[np.ndarray], list[float], list[float]]:
+    """Each query's 10 ids from the index and its search time, then the whole query's time
+    (index, re-ranking, placement) for the first ``whole`` curves."""
+    v = variants.shape[1]
+    found, t_index, t_query = [], [], []
+    for q in variants:
+        t = time.perf_counter()
+        found.append(atlas.index.search(q, v, 10)[1][0])
+        t_index.append(time.perf_counter() - t)
+    for pts in curves_q[:whole]:
+        t = time.perf_counter()
+        query(atlas, pts, top=5)
+        t_query.append(time.perf_counter() - t)
+    return found, t_index, t_query
+
+
 def bench_size(n: int, workers: int, root: Path) -> dict[str, float]:
     out = root / f"fourbar-{n}-w{workers}"
     t0 = time.perf_counter()
@@ -82,22 +100,13 @@ def bench_size(n: int, workers: int, root: Path) -> dict[str, float]:
     vectors = atlas.descriptors()
     rows = variants.reshape(-1, variants.shape[-1])
     truth = merge_variants(*exact_search(vectors, rows, 10), v, 10)[1]
-    found, t_index = [], []
-    for q in variants:
-        t = time.perf_counter()
-        found.append(atlas.index.search(q, v, 10)[1][0])
-        t_index.append(time.perf_counter() - t)
+    found, t_index, t_query = _timed_searches(atlas, curves_q, variants, whole=50)
     flat = Index.build(vectors, kind="exact")
     t_flat = []
     for q in variants[:50]:
         t = time.perf_counter()
         flat.search(q, v, 10)
         t_flat.append(time.perf_counter() - t)
-    t_query = []
-    for pts in curves_q[:50]:
-        t = time.perf_counter()
-        query(atlas, pts, top=5)
-        t_query.append(time.perf_counter() - t)
     result["recall_at_10"] = recall_at(np.array(found), truth)
     result["index_p50_ms"], result["index_p95_ms"] = _percentiles(t_index)
     result["flat_p50_ms"], _ = _percentiles(t_flat)
@@ -115,17 +124,7 @@ def measure_existing(path: Path) -> None:
     t_open = time.perf_counter() - t0
     manifest, figures = atlas.manifest, atlas.manifest["build"]
     curves_q, variants = _queries(atlas.spec, QUERIES)
-    v = variants.shape[1]
-    t_index = []
-    for q in variants:
-        t = time.perf_counter()
-        atlas.index.search(q, v, 10)
-        t_index.append(time.perf_counter() - t)
-    t_query = []
-    for pts in curves_q[:30]:
-        t = time.perf_counter()
-        query(atlas, pts, top=5)
-        t_query.append(time.perf_counter() - t)
+    _, t_index, t_query = _timed_searches(atlas, curves_q, variants, whole=30)
     p50, p95 = _percentiles(t_index)
     q50, _ = _percentiles(t_query)
     index = manifest["index"]

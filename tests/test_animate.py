@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from family_examples import FAMILY_EXAMPLES, family_of
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from PIL import Image, ImageChops
@@ -31,22 +32,7 @@ FRAMES = 8
 DPI = 40
 WIDTH = 256  # 6.4 inches at 40 dpi
 
-# One example per family (the composed linkage once in the plane and once on the sphere).
-EXAMPLE_OF = {
-    "fourbar": "crank-rocker.toml",
-    "slidercrank": "slider-crank.toml",
-    "geared-fivebar": "geared-fivebar.toml",
-    "doubleslider": "elliptic-trammel.toml",
-    "watt1": "watt1-example.toml",
-    "watt2": "watt2-example.toml",
-    "stephenson1": "stephenson1-example.toml",
-    "stephenson3": "stephenson3-example.toml",
-    "spherical-fourbar": "paper000-fig6-crank-rocker.toml",
-    "spherical-sixbar": "paper000-fig8-sixbar.toml",
-    "spherical-stephenson3": "paper001-stephenson3.toml",
-    "linkage/plane": "jansen-leg.toml",
-    "linkage/sphere": "paper000-fig6-linkage.toml",
-}
+EXAMPLE_OF = {key: f"{name}.toml" for key, name in FAMILY_EXAMPLES.items()}
 
 CRANK_ROCKER = FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=3.5, u=2, v=1)
 # rocker-input.toml: the 3.5 link driven, the 1 link turning fully; the input rocks.
@@ -67,11 +53,12 @@ def frames_of(path: Path) -> tuple[list[Image.Image], list[int], dict]:
 
 
 def test_the_examples_cover_every_family() -> None:
-    families = {name.split("/")[0] for name in EXAMPLE_OF}
+    families = {family_of(name) for name in EXAMPLE_OF}
     assert families == set(FAMILIES)
     for name, file in EXAMPLE_OF.items():
         mechanism = load_document(EXAMPLES / file).mechanism
-        family, _, space = name.partition("/")
+        family = family_of(name)
+        space = name[len(family) + 1 :]
         assert mechanism.family == family
         assert space in ("", mechanism.space)
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import ezdxf
 import numpy as np
 import pytest
+from family_examples import FAMILY_EXAMPLES
 from matplotlib.testing.compare import compare_images
 from PIL import Image
 
@@ -23,22 +24,6 @@ from linkwright.plot import save_figure
 from linkwright.plot.view import plot_mechanism
 
 GALLERY = Path(__file__).resolve().parents[1] / "docs" / "img" / "gallery"
-# One example per family: the README shows these pictures, and this test compares them.
-FAMILY_EXAMPLES = {
-    "fourbar": "crank-rocker",
-    "slidercrank": "offset-slider-crank",
-    "geared-fivebar": "geared-fivebar",
-    "doubleslider": "elliptic-trammel",
-    "watt1": "watt1-example",
-    "watt2": "watt2-example",
-    "stephenson1": "stephenson1-example",
-    "stephenson3": "stephenson3-example",
-    "spherical-fourbar": "paper000-fig6-crank-rocker",
-    "spherical-sixbar": "paper000-fig8-sixbar",
-    "spherical-stephenson3": "paper001-stephenson3",
-    "linkage-plane": "jansen-leg",
-    "linkage-sphere": "paper000-fig6-linkage",
-}
 GALLERY_DPI = 60
 GALLERY_SAMPLES = 360
 # RMS difference (0-255 grey levels) tolerated: fonts and anti-aliasing vary a little between

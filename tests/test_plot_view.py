@@ -13,6 +13,7 @@ from pathlib import Path
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
+from family_examples import FAMILY_EXAMPLES
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
@@ -34,21 +35,6 @@ from linkwright.plot.view import PlotError, plot_mechanism
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "linkwright" / "examples"
 MINUS = "\N{MINUS SIGN}"
 N = 120  # circuit samples for the pictures that are only rendered
-ONE_PER_FAMILY = {
-    "fourbar": "crank-rocker",
-    "slidercrank": "offset-slider-crank",
-    "geared-fivebar": "geared-fivebar",
-    "doubleslider": "elliptic-trammel",
-    "watt1": "watt1-example",
-    "watt2": "watt2-example",
-    "stephenson1": "stephenson1-example",
-    "stephenson3": "stephenson3-example",
-    "linkage (plane)": "jansen-leg",
-    "spherical-fourbar": "paper000-fig6-crank-rocker",
-    "spherical-sixbar": "paper000-fig8-sixbar",
-    "spherical-stephenson3": "paper001-stephenson3",
-    "linkage (sphere)": "paper000-fig6-linkage",
-}
 
 
 def example(name: str):
@@ -113,11 +99,11 @@ def crank_rocker_dead_centres(a0, b0, crank, coupler, rocker, u, v, assembly):
 def figures():
     return {
         family: plot_mechanism(example(name).mechanism, samples=N, title=example(name).title)
-        for family, name in ONE_PER_FAMILY.items()
+        for family, name in FAMILY_EXAMPLES.items()
     }
 
 
-@pytest.mark.parametrize("family", list(ONE_PER_FAMILY))
+@pytest.mark.parametrize("family", list(FAMILY_EXAMPLES))
 def test_every_family_renders_as_png_and_svg(figures, tmp_path, family):
     fig = figures[family]
     png = save_figure(fig, tmp_path / f"{family}.png")
@@ -130,7 +116,7 @@ def test_every_family_renders_as_png_and_svg(figures, tmp_path, family):
     root = ET.parse(svg).getroot()
     assert root.tag == "{http://www.w3.org/2000/svg}svg"
     assert len(list(root.iter("{http://www.w3.org/2000/svg}path"))) > 20
-    spherical = family.startswith("spherical") or family == "linkage (sphere)"
+    spherical = family.startswith("spherical") or family == "linkage-sphere"
     assert len(fig.axes) == (2 if spherical else 1)
     # One legend, under the drawing, where it cannot hide a curve.
     (legend,) = fig.legends
@@ -301,7 +287,7 @@ def test_six_bar_draws_every_assembly_combination_and_its_own_boldly(figures):
 
 
 def test_families_without_an_output_mark_no_dead_centres(figures):
-    for family in ("geared-fivebar", "doubleslider", "linkage (plane)", "linkage (sphere)"):
+    for family in ("geared-fivebar", "doubleslider", "linkage-plane", "linkage-sphere"):
         fig = figures[family]
         assert "dead centre" not in notes(fig)
         assert not [t for t in legend_texts(fig) if "dead centre" in t]

@@ -202,7 +202,6 @@ class ProjectionError(ValueError):
     """A direction that a map projection cannot place (zero, infinite, or the antipode)."""
 
 
-_X_AXIS = np.array([1.0, 0.0, 0.0])
 _Y_AXIS = np.array([0.0, 1.0, 0.0])
 _Z_AXIS = np.array([0.0, 0.0, 1.0])
 

@@ -56,9 +56,6 @@ from linkwright.engine import (
     Fixed,
     Motion,
     Rigid,
-    SphereCrank,
-    SphereDyad,
-    SphereRigid,
     Trammel,
 )
 from linkwright.files import atomic_path
@@ -71,6 +68,7 @@ from linkwright.plot.sphere import (
     plot_spherical_curves,
     stroke,
 )
+from linkwright.plot.sphere import _links as _sphere_links
 
 __all__ = ["AnimationError", "animate"]
 
@@ -512,15 +510,7 @@ def _sphere_scene(mechanism: Mechanism, cycle: _Cycle, title: str, dpi: int) -> 
     motion = cycle.motion
     pos = _positions(mechanism, motion)
     steps = mechanism.plan.steps
-    pairs: list[tuple[str, str]] = []
-    bodies: list[tuple[str, str, str]] = []
-    for step in steps:
-        if isinstance(step, SphereCrank):
-            pairs.append((step.pivot, step.name))
-        elif isinstance(step, SphereDyad):
-            pairs += [(step.p1, step.name), (step.p2, step.name)]
-        elif isinstance(step, SphereRigid):
-            bodies.append((step.origin, step.toward, step.name))
+    pairs, bodies = _sphere_links(mechanism)
     ground = [s.name for s in steps if isinstance(s, Fixed)]
     moving = [s.name for s in steps if not isinstance(s, Fixed)]
     traced = list(mechanism.plan.traced)
