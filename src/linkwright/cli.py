@@ -673,6 +673,74 @@ def demo(
         sys.stdout.write(f"{result}\n")
 
 
+@app.command()
+def serve(
+    port: Annotated[
+        int, typer.Option("--port", min=1, max=65535, help="TCP port to listen on.")
+    ] = 8000,
+    host: Annotated[
+        str,
+        typer.Option(
+            "--host",
+            help="Address to listen on. The default serves this machine only; give 0.0.0.0 to "
+            "let other machines reach the workbench (it has no login).",
+        ),
+    ] = "127.0.0.1",
+    data_dir: Annotated[
+        Path | None,
+        typer.Option(
+            "--data-dir",
+            metavar="DIR",
+            help="Where the library of saved mechanisms and the atlases live (default: "
+            "$LINKWRIGHT_DATA, else the user's data directory).",
+        ),
+    ] = None,
+) -> None:
+    """Start the browser workbench and print its address (stop it with Ctrl-C)."""
+    try:
+        import uvicorn
+
+        from linkwright.server import create_app, default_data_dir
+    except ImportError as exc:
+        raise CliError(f"the workbench needs its web server packages ({exc})") from None
+    root = data_dir if data_dir is not None else default_data_dir()
+    try:
+        application = create_app(root)
+    except OSError as exc:
+        raise CliError(f"--data-dir: cannot use {root}: {exc.strerror or exc}") from None
+    _check_listen(host, port)
+    shown = f"[{host}]" if ":" in host else host
+    sys.stdout.write(
+        f"linkwright workbench on http://{shown}:{port}  (library in {root}; Ctrl-C stops it)\n"
+    )
+    sys.stdout.flush()
+    config = uvicorn.Config(application, host=host, port=port, log_level="warning")
+    server = uvicorn.Server(config)
+    try:
+        server.run()
+    except (OSError, SystemExit):
+        raise CliError(f"--port: cannot listen on {host}:{port}") from None
+
+
+def _check_listen(host: str, port: int) -> None:
+    """Refuse, in one line, an address the server could not listen on (uvicorn would log a
+    traceback-like error and exit)."""
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except socket.gaierror as exc:
+        raise CliError(f"--host: cannot resolve {host!r}: {exc.strerror}") from None
+    family, kind, proto, _, address = infos[0]
+    with socket.socket(family, kind, proto) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(address)
+        except OSError as exc:
+            why = "another program is using that port" if exc.errno == 98 else exc.strerror
+            raise CliError(f"--port: cannot listen on {host}:{port}: {why}") from None
+
+
 # --------------------------------------------------------------------------------------------
 # Pictures, animations and exports
 # --------------------------------------------------------------------------------------------

@@ -86,7 +86,7 @@ from linkwright.plot.planar import (
     new_figure,
 )
 
-__all__ = ["KINDS", "DiagramError", "plot_diagram"]
+__all__ = ["KINDS", "DiagramError", "diagram_series", "plot_diagram"]
 
 Array = NDArray[np.float64]
 
@@ -911,6 +911,101 @@ def _trace(mechanism: Mechanism, samples: int) -> list[_Circuit]:
     return circuits
 
 
+def _panels(
+    mechanism: Mechanism, kind: str, run: _Run, outs: _Outputs
+) -> tuple[list[_Panel], str, bool]:
+    """The panels of one kind of diagram, the details line, and whether they are paper 003's."""
+    paper = False
+    if kind == "angles":
+        panels, details = _angle_panels(mechanism, run, outs)
+    elif kind == "coefficients":
+        panels, details, paper = _coefficient_panels(mechanism, run, outs)
+    else:
+        panels, details = _derivative_panels(mechanism, run, outs, 1 if kind == "velocity" else 2)
+    if not panels:
+        raise DiagramError(
+            f"{type(mechanism).__name__} has nothing to draw as {kind}: no dyad and no link whose "
+            "angle is defined (on the sphere, a link with no ground pivot has no single angle)"
+        )
+    return panels, details, paper
+
+
+def _check_request(mechanism: Mechanism, kinds: tuple[str, ...], samples: object) -> None:
+    for kind in kinds:
+        if not isinstance(kind, str) or kind not in KINDS:
+            raise DiagramError(f"kind must be one of {', '.join(KINDS)}; got {kind!r}")
+    if not isinstance(mechanism, Mechanism):
+        raise DiagramError(f"diagrams are drawn of a Mechanism, got {type(mechanism).__name__}")
+    if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or samples < 8:
+        raise DiagramError(f"samples must be an integer of at least 8, got {samples!r}")
+    batch = mechanism.batch_shape
+    if batch != ():
+        raise DiagramError(f"draw one linkage at a time; this mechanism has batch shape {batch}")
+
+
+def diagram_series(
+    mechanism: Mechanism, kinds: tuple[str, ...] = KINDS, *, samples: int = 720
+) -> dict[str, object]:
+    """The numbers behind :func:`plot_diagram`, for a page that draws the diagrams itself.
+
+    The circuit is traced once and every kind in ``kinds`` is read off it.
+
+    Returns
+    -------
+    dict
+        ``"x"``: the input angle in degrees per circuit, on the closed circuit's samples (the
+        first sample again at the end); ``"limits"``: the input's limit positions (degrees);
+        ``"full"``: whether the input turns fully; ``"describe"``: what the output is;
+        ``"kinds"``: for each kind, ``{"details": str, "panels": [{"ylabel", "series":
+        [{"label", "values" (per circuit, like x), "color"}], "ideal", "note", "clip"}]}``,
+        where ``"clip"`` is the |value| beyond which the page should clip (derivatives grow
+        without bound next to limit positions) or None.
+
+    Raises
+    ------
+    DiagramError
+        As :func:`plot_diagram`.
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import FourBar
+    >>> rocker = FourBar(A0=[0, 0], B0=[1, 0], crank=3.5, coupler=5, rocker=1)
+    >>> d = diagram_series(rocker, ("angles",), samples=16)
+    >>> d["full"], [round(v, 3) for v in d["limits"]]
+    (False, [113.132, 246.868])
+    >>> [p["series"][0]["label"] for p in d["kinds"]["angles"]["panels"]]
+    ['φ3', 'γ']
+    """
+    _check_request(mechanism, tuple(kinds), samples)
+    run = _legs(mechanism, _trace(mechanism, int(samples)))
+    outs = _outputs(mechanism, run.circuits[0].motion)
+    out: dict[str, object] = {}
+    for kind in kinds:
+        panels, details, _ = _panels(mechanism, kind, run, outs)
+        out[kind] = {
+            "details": details,
+            "panels": [
+                {
+                    "ylabel": p.ylabel,
+                    "series": [
+                        {"label": s.label, "values": s.values, "color": s.color} for s in p.series
+                    ],
+                    "ideal": p.ideal,
+                    "note": p.note,
+                    "clip": _clip_limit(p, run) if p.clip and not run.full else None,
+                }
+                for p in panels
+            ],
+        }
+    return {
+        "x": run.x,
+        "limits": run.limits,
+        "full": run.full,
+        "describe": outs.describe,
+        "kinds": out,
+    }
+
+
 def plot_diagram(
     mechanism: Mechanism, kind: str, *, samples: int = 720, title: str | None = None
 ) -> Figure:
@@ -997,32 +1092,10 @@ def plot_diagram(
     ...
     linkwright.plot.diagrams.DiagramError: FourBar cannot be assembled at any input angle: ...
     """
-    if not isinstance(kind, str) or kind not in KINDS:
-        raise DiagramError(f"kind must be one of {', '.join(KINDS)}; got {kind!r}")
-    if not isinstance(mechanism, Mechanism):
-        raise DiagramError(f"plot_diagram draws a Mechanism, got {type(mechanism).__name__}")
-    if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or samples < 8:
-        raise DiagramError(f"samples must be an integer of at least 8, got {samples!r}")
-    batch = mechanism.batch_shape
-    if batch != ():
-        raise DiagramError(f"draw one linkage at a time; this mechanism has batch shape {batch}")
-    circuits = _trace(mechanism, int(samples))
-    run = _legs(mechanism, circuits)
-    outs = _outputs(mechanism, circuits[0].motion)
-
-    paper = False
-    if kind == "angles":
-        panels, details = _angle_panels(mechanism, run, outs)
-    elif kind == "coefficients":
-        panels, details, paper = _coefficient_panels(mechanism, run, outs)
-    else:
-        panels, details = _derivative_panels(mechanism, run, outs, 1 if kind == "velocity" else 2)
-
-    if not panels:
-        raise DiagramError(
-            f"{type(mechanism).__name__} has nothing to draw as {kind}: no dyad and no link whose "
-            "angle is defined (on the sphere, a link with no ground pivot has no single angle)"
-        )
+    _check_request(mechanism, (kind,), samples)
+    run = _legs(mechanism, _trace(mechanism, int(samples)))
+    outs = _outputs(mechanism, run.circuits[0].motion)
+    panels, details, paper = _panels(mechanism, kind, run, outs)
     fig = new_figure((8.5, 1.6 + 2.55 * len(panels)))
     axes = list(np.atleast_1d(fig.subplots(len(panels), 1, sharex=True)))
     for ax, panel in zip(axes, panels, strict=True):

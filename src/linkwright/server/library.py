@@ -1,0 +1,733 @@
+"""The workbench's library of saved mechanisms: one SQLite file in the data directory.
+
+:class:`Library` keeps named, validated documents (the :func:`~linkwright.io.document_to_dict`
+form) with their family, title and creation and modification times. Nothing a stopped server
+leaves behind can be half a save: the database runs in WAL mode with ``synchronous=FULL``, and
+every write (save, overwrite, rename, delete, import) is one ``BEGIN IMMEDIATE … COMMIT``
+transaction, so a process killed mid-save leaves the library as it was before that save or
+after it, and a save that returned is on disk. Each call opens its own connection, so one
+:class:`Library` may be used from any number of threads (FastAPI runs sync routes in a thread
+pool); writers queue on SQLite's lock.
+
+:data:`router` serves the library under ``/library`` (app.py mounts it at ``/api``; the
+contract is in the workbench's API notes): list, save, get, rename, overwrite, delete, import
+a TOML or JSON file, export one.
+
+Errors: :class:`LibraryError` (a ``ValueError``: a bad name, format or file; answered 422),
+:class:`LibraryConflict` (a name already taken; 409), :class:`LibraryNotFound` (a
+``LookupError``: no such entry; 404). An invalid document raises
+:class:`~linkwright.io.DocumentError` (also a ``ValueError``) naming its field.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sqlite3
+import time
+import tomllib
+import unicodedata
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any
+from urllib.parse import quote
+
+from fastapi import APIRouter, File, Form, Request, UploadFile
+from fastapi.responses import Response
+from pydantic import BaseModel
+from starlette.concurrency import run_in_threadpool
+
+from linkwright.io import document_to_dict, parse_document
+from linkwright.io.documents import dumps_toml
+
+__all__ = [
+    "FORMATS",
+    "MAX_NAME",
+    "MAX_TEXT",
+    "Library",
+    "LibraryConflict",
+    "LibraryError",
+    "LibraryNotFound",
+    "router",
+]
+
+MAX_NAME = 200
+"""Longest entry name, in characters (after stripping)."""
+
+MAX_TEXT = 2_000_000
+"""Longest document text :meth:`Library.import_text` reads, in characters."""
+
+FORMATS = ("toml", "json")
+"""Document file formats the library imports and exports."""
+
+_MEDIA_TYPES = {"toml": "application/toml", "json": "application/json"}
+
+_SCHEMA = 1
+_BUSY_SECONDS = 30.0
+# SQLite's INTEGER is 64-bit signed; a larger Python int cannot even be bound.
+_MAX_ID = 2**63 - 1
+# Characters a name may not hold: controls (tabs and newlines included), lone surrogates (they
+# cannot be stored as UTF-8) and the Unicode line and paragraph separators (a name is one line).
+_REFUSED_CATEGORIES = frozenset({"Cc", "Cs", "Zl", "Zp"})
+_SUFFIXED = re.compile(r"^(?P<base>.*) \((?P<n>[0-9]+)\)$")
+
+
+class LibraryError(ValueError):
+    """A library request is invalid: the message names the field and the problem."""
+
+
+class LibraryConflict(LibraryError):
+    """An entry with that name already exists (the workbench answers 409)."""
+
+
+class LibraryNotFound(LookupError):
+    """No library entry has that id (the workbench answers 404)."""
+
+    def __str__(self) -> str:
+        # KeyError-style quoting of the message would read oddly in {"error": ...}.
+        return str(self.args[0]) if self.args else "library: no such entry"
+
+
+# --------------------------------------------------------------------------------------------
+# Names, ids, formats, texts
+# --------------------------------------------------------------------------------------------
+
+
+def _check_name(name: Any, field: str = "name") -> str:
+    """The stored form of a name: NFC (so names that look the same are the same), stripped."""
+    if not isinstance(name, str):
+        raise LibraryError(f"{field}: must be a string, got {type(name).__name__}")
+    name = unicodedata.normalize("NFC", name).strip()
+    if not name:
+        raise LibraryError(f"{field}: must not be empty")
+    if len(name) > MAX_NAME:
+        raise LibraryError(f"{field}: {len(name)} characters, at most {MAX_NAME} allowed")
+    for ch in name:
+        if unicodedata.category(ch) in _REFUSED_CATEGORIES:
+            raise LibraryError(
+                f"{field}: contains U+{ord(ch):04X} (a control character or line break)"
+            )
+    return name
+
+
+def _name_from(title: str | None) -> str:
+    """A valid name made from a document title (or ``"untitled"``): controls and line breaks
+    become spaces, runs of white space one space, and the result is cut to the length limit."""
+    if not title:
+        return "untitled"
+    cleaned = "".join(
+        " " if unicodedata.category(ch) in _REFUSED_CATEGORIES else ch for ch in title
+    )
+    cleaned = " ".join(unicodedata.normalize("NFC", cleaned).split())[:MAX_NAME].strip()
+    return cleaned or "untitled"
+
+
+def _check_id(entry_id: Any) -> int:
+    # Only plain decimal digits: int() would also read " 5", "+5", "5_0" and non-ASCII digits.
+    if isinstance(entry_id, str) and entry_id.isascii() and entry_id.isdigit():
+        value = int(entry_id)
+    elif isinstance(entry_id, int) and not isinstance(entry_id, bool):
+        value = entry_id
+    else:
+        raise LibraryNotFound(f"library: no entry with id {entry_id!r}")
+    if not 0 < value <= _MAX_ID:
+        raise LibraryNotFound(f"library: no entry with id {value}")
+    return value
+
+
+def _check_format(fmt: Any, field: str = "format") -> str:
+    if not isinstance(fmt, str) or fmt.lower().lstrip(".") not in FORMATS:
+        shown = fmt if isinstance(fmt, str) else type(fmt).__name__
+        raise LibraryError(f"{field}: expected 'toml' or 'json', got {shown!r}")
+    return fmt.lower().lstrip(".")
+
+
+def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            # json keeps the last of two values silently; a document that says two things
+            # about one field is refused, as TOML refuses it.
+            raise LibraryError(f"duplicate key {key!r}")
+        out[key] = value
+    return out
+
+
+def _decode(text: Any, source: str) -> str:
+    """A document's text: bytes read as UTF-8, a byte-order mark dropped, the size checked."""
+    if isinstance(text, bytes | bytearray):
+        try:
+            text = bytes(text).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise LibraryError(f"{source}: not UTF-8 text (byte {exc.start})") from None
+    if not isinstance(text, str):
+        raise LibraryError(f"{source}: must be text, got {type(text).__name__}")
+    if len(text) > MAX_TEXT:
+        raise LibraryError(f"{source}: {len(text):,} characters, over the {MAX_TEXT:,} allowed")
+    return text.removeprefix("\ufeff")
+
+
+def _parse_text(text: str, fmt: str, source: str) -> Any:
+    """The mapping a TOML or JSON document text holds; errors start with ``source``."""
+    if fmt == "toml":
+        try:
+            return tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise LibraryError(f"{source}: invalid TOML: {exc}") from None
+    try:
+        return json.loads(text, object_pairs_hook=_no_duplicates)
+    except json.JSONDecodeError as exc:
+        where = f"(at line {exc.lineno}, column {exc.colno})"
+        raise LibraryError(f"{source}: invalid JSON: {exc.msg} {where}") from None
+    except LibraryError as exc:
+        raise LibraryError(f"{source}: invalid JSON: {exc}") from None
+    except RecursionError:
+        raise LibraryError(f"{source}: invalid JSON: nested too deeply") from None
+
+
+def _sniff(text: str) -> str:
+    # A TOML document cannot start with "{" (a key or a [table] comes first); JSON's must.
+    return "json" if text.lstrip()[:1] == "{" else "toml"
+
+
+def _validated(document: Any, source: str = "document") -> tuple[dict[str, Any], str, str | None]:
+    """(canonical mapping, family, title) of a document; DocumentError naming the field."""
+    doc = parse_document(document, source=source)
+    return document_to_dict(doc), doc.family, doc.title
+
+
+def _file_text(document: Mapping[str, Any], fmt: str) -> str:
+    if fmt == "toml":
+        return dumps_toml(document)
+    return json.dumps(document, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
+
+
+def _dumps(document: Mapping[str, Any]) -> str:
+    return json.dumps(document, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+
+
+# --------------------------------------------------------------------------------------------
+# The store
+# --------------------------------------------------------------------------------------------
+
+
+class Library:
+    """Named mechanism documents in one SQLite file (created on first use).
+
+    Parameters
+    ----------
+    path : the database file; missing parent folders are created.
+
+    Raises
+    ------
+    LibraryError
+        If ``path`` exists but is not a linkwright library (or is one from a newer version).
+
+    Notes
+    -----
+    Entries are plain mappings: ``id`` (int, never reused), ``name``, ``family``, ``title``
+    (the document's, or None), ``created`` and ``modified`` (seconds since the epoch), and, from
+    every method but :meth:`list`, ``document`` (the validated document, every default filled).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from linkwright.io import document_to_dict, load_example
+    >>> lib = Library(Path(tempfile.mkdtemp()) / "library.sqlite3")
+    >>> doc = document_to_dict(load_example("crank-rocker"))
+    >>> entry = lib.save("mine", doc)
+    >>> entry["id"], entry["family"], entry["document"] == doc
+    (1, 'fourbar', True)
+    >>> lib.save("mine", doc)
+    Traceback (most recent call last):
+    ...
+    linkwright.server.library.LibraryConflict: name: an entry named 'mine' already exists (id 1)
+    >>> lib.rename(1, "  Grashof  ")["name"]
+    'Grashof'
+    >>> [(e["id"], e["name"]) for e in lib.list()]
+    [(1, 'Grashof')]
+    >>> print(lib.export_text(1, "toml").splitlines()[1])
+    title = "Crank-rocker (paper 003, Table 1)"
+    >>> lib.delete(1)
+    1
+    >>> lib.get(1)
+    Traceback (most recent call last):
+    ...
+    linkwright.server.library.LibraryNotFound: library: no entry with id 1
+    """
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            self._create()
+        except sqlite3.DatabaseError as exc:
+            raise LibraryError(
+                f"library: {self.path} is not a linkwright library ({exc})"
+            ) from None
+
+    def __repr__(self) -> str:
+        return f"Library({str(self.path)!r})"
+
+    def _create(self) -> None:
+        conn = sqlite3.connect(self.path, timeout=_BUSY_SECONDS, isolation_level=None)
+        try:
+            # WAL is a property of the file (it persists); it lets readers go on while one
+            # writer commits, and a commit is one append to the log, so a kill cannot tear it.
+            conn.execute("PRAGMA journal_mode=WAL")
+            conn.execute("PRAGMA synchronous=FULL")
+            conn.execute("BEGIN IMMEDIATE")
+            try:
+                version = conn.execute("PRAGMA user_version").fetchone()[0]
+                if version > _SCHEMA:
+                    raise LibraryError(
+                        f"library: {self.path} was written by a newer linkwright "
+                        f"(schema {version}; this one reads {_SCHEMA})"
+                    )
+                conn.execute(
+                    """CREATE TABLE IF NOT EXISTS entries (
+                        id INTEGER PRIMARY KEY AUTOINCREMENT,
+                        name TEXT NOT NULL UNIQUE,
+                        document TEXT NOT NULL,
+                        family TEXT NOT NULL,
+                        title TEXT,
+                        created REAL NOT NULL,
+                        modified REAL NOT NULL)"""
+                )
+                conn.execute(f"PRAGMA user_version={_SCHEMA}")
+            except BaseException:
+                conn.execute("ROLLBACK")
+                raise
+            conn.execute("COMMIT")
+        finally:
+            conn.close()
+
+    @contextmanager
+    def _transaction(self, write: bool) -> Iterator[sqlite3.Connection]:
+        """One connection and one transaction: committed when the block ends, rolled back if
+        it raises. A write takes SQLite's write lock at once (``BEGIN IMMEDIATE``), so two
+        writers queue instead of one failing when it tries to upgrade a read lock."""
+        conn = sqlite3.connect(self.path, timeout=_BUSY_SECONDS, isolation_level=None)
+        try:
+            conn.row_factory = sqlite3.Row
+            # FULL: the log is flushed to disk at every commit, so a save that returned
+            # survives a power cut too, not only a killed process.
+            conn.execute("PRAGMA synchronous=FULL")
+            conn.execute("BEGIN IMMEDIATE" if write else "BEGIN")
+            try:
+                yield conn
+            except BaseException:
+                if conn.in_transaction:
+                    conn.execute("ROLLBACK")
+                raise
+            conn.execute("COMMIT")
+        finally:
+            conn.close()
+
+    @staticmethod
+    def _entry(row: sqlite3.Row, document: bool = True) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "id": row["id"],
+            "name": row["name"],
+            "family": row["family"],
+            "title": row["title"],
+            "created": row["created"],
+            "modified": row["modified"],
+        }
+        if document:
+            out["document"] = json.loads(row["document"])
+        return out
+
+    @staticmethod
+    def _row(conn: sqlite3.Connection, entry_id: int) -> sqlite3.Row:
+        row = conn.execute("SELECT * FROM entries WHERE id = ?", (entry_id,)).fetchone()
+        if row is None:
+            raise LibraryNotFound(f"library: no entry with id {entry_id}")
+        return row
+
+    @staticmethod
+    def _holder(conn: sqlite3.Connection, name: str) -> int | None:
+        row = conn.execute("SELECT id FROM entries WHERE name = ?", (name,)).fetchone()
+        return None if row is None else int(row[0])
+
+    @staticmethod
+    def _unique(conn: sqlite3.Connection, name: str) -> str:
+        """``name``, or ``name (2)``, ``name (3)`` … : the first one free."""
+        if Library._holder(conn, name) is None:
+            return name
+        match = _SUFFIXED.match(name)
+        base, n = (match["base"], int(match["n"])) if match else (name, 1)
+        while True:
+            n += 1
+            suffix = f" ({n})"
+            candidate = base[: MAX_NAME - len(suffix)].rstrip() + suffix
+            if Library._holder(conn, candidate) is None:
+                return candidate
+
+    def _insert(
+        self,
+        conn: sqlite3.Connection,
+        name: str,
+        document: dict[str, Any],
+        family: str,
+        title: str | None,
+    ) -> int:
+        now = time.time()
+        cur = conn.execute(
+            "INSERT INTO entries (name, document, family, title, created, modified)"
+            " VALUES (?, ?, ?, ?, ?, ?)",
+            (name, _dumps(document), family, title, now, now),
+        )
+        return int(cur.lastrowid or 0)
+
+    # ---------------------------------------------------------------------------- verbs
+
+    def save(
+        self, name: str, document: Mapping[str, Any], overwrite: bool = False
+    ) -> dict[str, Any]:
+        """Save ``document`` under ``name``; with ``overwrite`` an entry of that name is replaced
+        (keeping its id and creation time).
+
+        Parameters
+        ----------
+        name : 1 to :data:`MAX_NAME` characters once stripped, no control characters.
+        document : a document mapping; validated with :func:`~linkwright.io.parse_document`
+            and stored in its canonical form.
+        overwrite : replace an existing entry of the same name instead of refusing.
+
+        Returns
+        -------
+        dict
+            The entry, with its document.
+
+        Raises
+        ------
+        LibraryError
+            For a bad name.
+        LibraryConflict
+            If the name is taken and ``overwrite`` is false.
+        DocumentError
+            For an invalid document, naming the field.
+        """
+        name = _check_name(name)
+        canonical, family, title = _validated(document)
+        with self._transaction(write=True) as conn:
+            holder = self._holder(conn, name)
+            if holder is not None and not overwrite:
+                raise LibraryConflict(f"name: an entry named {name!r} already exists (id {holder})")
+            if holder is None:
+                entry_id = self._insert(conn, name, canonical, family, title)
+            else:
+                entry_id = holder
+                conn.execute(
+                    "UPDATE entries SET document = ?, family = ?, title = ?, modified = ?"
+                    " WHERE id = ?",
+                    (_dumps(canonical), family, title, time.time(), entry_id),
+                )
+            return self._entry(self._row(conn, entry_id))
+
+    def update(self, entry_id: int, document: Mapping[str, Any]) -> dict[str, Any]:
+        """Save ``document`` over entry ``entry_id`` (its name, id and creation time stay).
+
+        Raises
+        ------
+        LibraryNotFound
+            If there is no such entry.
+        DocumentError
+            For an invalid document, naming the field.
+        """
+        entry_id = _check_id(entry_id)
+        canonical, family, title = _validated(document)
+        with self._transaction(write=True) as conn:
+            self._row(conn, entry_id)
+            conn.execute(
+                "UPDATE entries SET document = ?, family = ?, title = ?, modified = ? WHERE id = ?",
+                (_dumps(canonical), family, title, time.time(), entry_id),
+            )
+            return self._entry(self._row(conn, entry_id))
+
+    def rename(self, entry_id: int, name: str) -> dict[str, Any]:
+        """Give entry ``entry_id`` a new name.
+
+        Raises
+        ------
+        LibraryError
+            For a bad name.
+        LibraryConflict
+            If another entry has that name.
+        LibraryNotFound
+            If there is no such entry.
+        """
+        entry_id = _check_id(entry_id)
+        name = _check_name(name)
+        with self._transaction(write=True) as conn:
+            row = self._row(conn, entry_id)
+            if row["name"] != name:
+                holder = self._holder(conn, name)
+                if holder is not None:
+                    raise LibraryConflict(
+                        f"name: an entry named {name!r} already exists (id {holder})"
+                    )
+                conn.execute(
+                    "UPDATE entries SET name = ?, modified = ? WHERE id = ?",
+                    (name, time.time(), entry_id),
+                )
+                row = self._row(conn, entry_id)
+            return self._entry(row)
+
+    def list(self) -> list[dict[str, Any]]:
+        """Every entry without its document, sorted by name (case-insensitively, then exactly).
+
+        Returns
+        -------
+        list of dict
+            ``id``, ``name``, ``family``, ``title``, ``created``, ``modified`` of each entry.
+        """
+        with self._transaction(write=False) as conn:
+            rows = conn.execute(
+                "SELECT id, name, family, title, created, modified FROM entries"
+            ).fetchall()
+        entries = [self._entry(row, document=False) for row in rows]
+        return sorted(entries, key=lambda e: (e["name"].casefold(), e["name"]))
+
+    def get(self, entry_id: int) -> dict[str, Any]:
+        """Entry ``entry_id`` with its document.
+
+        Raises
+        ------
+        LibraryNotFound
+            If there is no such entry.
+        """
+        entry_id = _check_id(entry_id)
+        with self._transaction(write=False) as conn:
+            return self._entry(self._row(conn, entry_id))
+
+    def delete(self, entry_id: int) -> int:
+        """Remove entry ``entry_id``; returns its id. Ids are never given out again.
+
+        Raises
+        ------
+        LibraryNotFound
+            If there is no such entry.
+        """
+        entry_id = _check_id(entry_id)
+        with self._transaction(write=True) as conn:
+            if conn.execute("DELETE FROM entries WHERE id = ?", (entry_id,)).rowcount == 0:
+                raise LibraryNotFound(f"library: no entry with id {entry_id}")
+        return entry_id
+
+    def import_text(
+        self,
+        text: str | bytes,
+        format: str | None = None,
+        name: str | None = None,
+        *,
+        source: str = "text",
+        default_name: str | None = None,
+    ) -> dict[str, Any]:
+        """Add a new entry from a TOML or JSON document's text.
+
+        Parameters
+        ----------
+        text : the document file's content (bytes are read as UTF-8).
+        format : ``"toml"`` or ``"json"``; None guesses (JSON if the text starts with ``{``).
+        name : the entry's name (refused if taken); None names it after the document's title,
+            else ``default_name``, else ``"untitled"``, made unique with `` (2)``, `` (3)`` ….
+        source : what error messages call the text (a file name).
+        default_name : the name to use when there is no ``name`` and the document no title.
+
+        Returns
+        -------
+        dict
+            The new entry, with its document.
+
+        Raises
+        ------
+        LibraryError
+            For a bad format, name or text (naming the line and column of a syntax error).
+        LibraryConflict
+            If ``name`` is given and taken.
+        DocumentError
+            For an invalid document, naming the field.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> lib = Library(Path(tempfile.mkdtemp()) / "library.sqlite3")
+        >>> text = '''format = "linkwright/1"
+        ... title = "Slider"
+        ... [mechanism]
+        ... family = "slidercrank"
+        ... A0 = [0, 0]
+        ... crank = 1
+        ... rod = 3
+        ... line = { point = [0, 0], angle = 0 }
+        ... '''
+        >>> [lib.import_text(text, "toml")["name"] for _ in range(3)]
+        ['Slider', 'Slider (2)', 'Slider (3)']
+        >>> lib.import_text(text.replace("rod = 3", "rod = 0"), "toml")
+        Traceback (most recent call last):
+        ...
+        linkwright.io.documents.DocumentError: text: mechanism.rod: must be a positive number, got 0
+        """
+        fmt = None if format is None else _check_format(format)
+        text = _decode(text, source)
+        mapping = _parse_text(text, fmt or _sniff(text), source)
+        canonical, family, title = _validated(mapping, source=source)
+        explicit = None if name is None else _check_name(name)
+        with self._transaction(write=True) as conn:
+            if explicit is None:
+                chosen = self._unique(conn, _name_from(title or default_name))
+            else:
+                holder = self._holder(conn, explicit)
+                if holder is not None:
+                    raise LibraryConflict(
+                        f"name: an entry named {explicit!r} already exists (id {holder})"
+                    )
+                chosen = explicit
+            entry_id = self._insert(conn, chosen, canonical, family, title)
+            return self._entry(self._row(conn, entry_id))
+
+    def export_text(self, entry_id: int, format: str = "toml") -> str:
+        """Entry ``entry_id``'s document as the text of a ``.toml`` or ``.json`` file.
+
+        Raises
+        ------
+        LibraryError
+            For a format other than ``"toml"`` or ``"json"``.
+        LibraryNotFound
+            If there is no such entry.
+        """
+        return _file_text(self.get(entry_id)["document"], _check_format(format))
+
+
+# --------------------------------------------------------------------------------------------
+# Routes (mounted at /api by app.py)
+# --------------------------------------------------------------------------------------------
+
+router = APIRouter()
+
+
+class SaveRequest(BaseModel):
+    name: str
+    document: dict[str, Any]
+    overwrite: bool = False
+
+
+class RenameRequest(BaseModel):
+    name: str
+
+
+class UpdateRequest(BaseModel):
+    document: dict[str, Any]
+
+
+def _library(request: Request) -> Library:
+    library: Library = request.app.state.library
+    return library
+
+
+def _blank(name: Any) -> bool:
+    # An empty name box on the page means "name it after the document", not a bad name.
+    return name is None or (isinstance(name, str) and not name.strip())
+
+
+def _filename(name: str, fmt: str) -> str:
+    """A Content-Disposition value: an ASCII fallback and the UTF-8 name (RFC 6266)."""
+    ascii_name = re.sub(r"[^A-Za-z0-9._ -]+", "_", name).strip(" ._") or "mechanism"
+    return (
+        f'attachment; filename="{ascii_name}.{fmt}"; '
+        f"filename*=UTF-8''{quote(f'{name}.{fmt}', safe='')}"
+    )
+
+
+@router.get("/library")
+def list_route(request: Request) -> list[dict[str, Any]]:
+    return _library(request).list()
+
+
+@router.post("/library")
+def save_route(body: SaveRequest, request: Request) -> dict[str, Any]:
+    return _library(request).save(body.name, body.document, body.overwrite)
+
+
+@router.post("/library/import")
+async def import_route(
+    request: Request,
+    file: Annotated[UploadFile | None, File()] = None,
+    name: Annotated[str | None, Form()] = None,
+    format: Annotated[str | None, Form()] = None,
+) -> dict[str, Any]:
+    library = _library(request)
+    if file is not None:
+        data = await file.read(MAX_TEXT * 4 + 1)
+        filename = file.filename or "file"
+        if not format:
+            suffix = Path(filename).suffix.lower()
+            if suffix and suffix not in (".toml", ".json"):
+                raise LibraryError(
+                    f"file: unknown file type {suffix!r} ({filename}): expected .toml or .json"
+                )
+            format = suffix.lstrip(".") or None
+        return await run_in_threadpool(
+            library.import_text,
+            data,
+            format,
+            None if _blank(name) else name,
+            source=filename,
+            default_name=Path(filename).stem or None,
+        )
+    content_type = request.headers.get("content-type", "")
+    if not content_type.startswith("application/json"):
+        raise LibraryError(
+            'body: expected a multipart form with a \'file\', or JSON {"text", "format", "name"}'
+        )
+    try:
+        body = await request.json()
+    except ValueError:
+        raise LibraryError("body: not valid JSON") from None
+    if not isinstance(body, dict):
+        raise LibraryError('body: expected a JSON object {"text", "format", "name"}')
+    unknown = sorted(set(body) - {"text", "format", "name"})
+    if unknown:
+        raise LibraryError(f"body: unknown field {unknown[0]!r} (expected text, format, name)")
+    if "text" not in body:
+        raise LibraryError("text: missing required field (the document file's content)")
+    if not isinstance(body["text"], str):
+        raise LibraryError(f"text: must be a string, got {type(body['text']).__name__}")
+    name = None if _blank(body.get("name")) else body["name"]
+    return await run_in_threadpool(library.import_text, body["text"], body.get("format"), name)
+
+
+@router.get("/library/{entry_id}")
+def get_route(entry_id: str, request: Request) -> dict[str, Any]:
+    return _library(request).get(_check_id(entry_id))
+
+
+@router.patch("/library/{entry_id}")
+def rename_route(entry_id: str, body: RenameRequest, request: Request) -> dict[str, Any]:
+    return _library(request).rename(_check_id(entry_id), body.name)
+
+
+@router.put("/library/{entry_id}")
+def update_route(entry_id: str, body: UpdateRequest, request: Request) -> dict[str, Any]:
+    return _library(request).update(_check_id(entry_id), body.document)
+
+
+@router.delete("/library/{entry_id}")
+def delete_route(entry_id: str, request: Request) -> dict[str, Any]:
+    return {"deleted": _library(request).delete(_check_id(entry_id))}
+
+
+@router.get("/library/{entry_id}/export")
+def export_route(entry_id: str, request: Request, format: str = "toml") -> Response:
+    fmt = _check_format(format)
+    entry = _library(request).get(_check_id(entry_id))
+    text = _file_text(entry["document"], fmt)
+    return Response(
+        text.encode("utf-8"),
+        media_type=f"{_MEDIA_TYPES[fmt]}; charset=utf-8",
+        headers={"Content-Disposition": _filename(entry["name"], fmt)},
+    )
