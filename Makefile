@@ -44,6 +44,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python bench/run.py
 	$(BIN)/python bench/synthesis.py
 	$(BIN)/python bench/atlas.py
+	$(BIN)/python bench/workbench.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache
