@@ -23,12 +23,9 @@ from __future__ import annotations
 import argparse
 import os
 import platform
-import shutil
-import socket
 import statistics
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -36,19 +33,10 @@ import httpx
 import numpy as np
 
 from linkwright.io import document_to_dict, load_example
-from linkwright.server import create_app
+from linkwright.server.local import CHROMIUM_ARGS, LocalServer, chromium_path
 from linkwright.server.scene import scene
 
 TARGET_P95_MS = 50.0
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 
 def _percentiles(ms: list[float]) -> tuple[float, float]:
@@ -67,22 +55,6 @@ def _cranks(n: int) -> list[float]:
     return [float(c) for c in np.linspace(0.8, 1.2, n)]
 
 
-def _serve(data_dir: Path) -> tuple[object, threading.Thread, str]:
-    import uvicorn
-
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    server = uvicorn.Server(
-        uvicorn.Config(create_app(data_dir), host="127.0.0.1", port=port, log_level="warning")
-    )
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.02)
-    return server, thread, f"http://127.0.0.1:{port}"
-
-
 def _time(fn, repeat: int) -> list[float]:
     out = []
     for i in range(repeat):
@@ -93,7 +65,7 @@ def _time(fn, repeat: int) -> list[float]:
 
 
 def _browser(url: str, repeat: int) -> list[float] | str:
-    path = os.environ.get("LINKWRIGHT_CHROMIUM") or shutil.which("chromium")
+    path = chromium_path()
     if path is None:
         return "skipped: Debian's chromium is not installed"
     try:
@@ -147,22 +119,17 @@ def main(argv: list[str] | None = None) -> int:
     )
     scene(docs[0], samples=360)  # warm: imports, first-time compilation
     compute = _time(lambda i: scene(docs[i], samples=360), n)
-    with tempfile.TemporaryDirectory() as tmp:
-        server, thread, url = _serve(Path(tmp))
-        try:
-            with httpx.Client(base_url=url, timeout=30) as client:
-                client.post("/api/scene", json={"document": docs[0], "samples": 360})
-                health = _time(lambda i: client.get("/api/health"), n)
-                http = _time(
-                    lambda i: client.post(
-                        "/api/scene", json={"document": docs[i], "samples": 360}
-                    ).raise_for_status(),
-                    n,
-                )
-            browser = _browser(url, n)
-        finally:
-            server.should_exit = True
-            thread.join(10)
+    with tempfile.TemporaryDirectory() as tmp, LocalServer(Path(tmp)) as url:
+        with httpx.Client(base_url=url, timeout=30) as client:
+            client.post("/api/scene", json={"document": docs[0], "samples": 360})
+            health = _time(lambda i: client.get("/api/health"), n)
+            http = _time(
+                lambda i: client.post(
+                    "/api/scene", json={"document": docs[i], "samples": 360}
+                ).raise_for_status(),
+                n,
+            )
+        browser = _browser(url, n)
     rows = [
         ("scene() in process", compute),
         ("GET /api/health (HTTP floor)", health),

@@ -8,29 +8,15 @@ pictures go to ``docs/img/workbench/``.
 from __future__ import annotations
 
 import math
-import shutil
-import socket
 import sys
 import tempfile
-import threading
-import time
 from pathlib import Path
 
-import uvicorn
 from playwright.sync_api import Page, sync_playwright
 
-from linkwright.server import create_app
+from linkwright.server.local import CHROMIUM_ARGS, LocalServer, chromium_path
 
 OUT = Path(__file__).parent / "img" / "workbench"
-ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 
 
 def _settle(page: Page, before: int) -> None:
@@ -108,31 +94,16 @@ def shoot(page: Page, url: str) -> list[Path]:
 
 def main() -> int:
     OUT.mkdir(parents=True, exist_ok=True)
-    chromium = shutil.which("chromium")
+    chromium = chromium_path()
     if chromium is None:
         print("Debian's chromium is not installed (apt-get install chromium)", file=sys.stderr)
         return 2
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    data = tempfile.mkdtemp()
-    server = uvicorn.Server(
-        uvicorn.Config(create_app(data), host="127.0.0.1", port=port, log_level="warning")
-    )
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    while not server.started:
-        time.sleep(0.02)
-    try:
-        with sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=chromium, args=ARGS)
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            for path in shoot(page, f"http://127.0.0.1:{port}/"):
-                print(f"wrote {path}")
-            browser.close()
-    finally:
-        server.should_exit = True
-        thread.join(10)
+    with LocalServer(tempfile.mkdtemp()) as url, sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=chromium, args=CHROMIUM_ARGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        for path in shoot(page, url + "/"):
+            print(f"wrote {path}")
+        browser.close()
     return 0
 
 

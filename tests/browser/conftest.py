@@ -10,76 +10,22 @@ run them.
 from __future__ import annotations
 
 import os
-import shutil
-import socket
-import threading
-import time
 from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
+
+from linkwright.server.local import CHROMIUM_ARGS, LocalServer, chromium_path
 
 playwright_sync = pytest.importorskip("playwright.sync_api")
 
 # The synthesis panel builds its atlas on first use: a small one keeps that to a second.
 os.environ.setdefault("LINKWRIGHT_WORKBENCH_ATLAS_COUNT", "1500")
 
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
-
-
-def chromium_path() -> str | None:
-    """Debian's chromium, or the one named by ``LINKWRIGHT_CHROMIUM``."""
-    named = os.environ.get("LINKWRIGHT_CHROMIUM")
-    if named:
-        return named
-    return shutil.which("chromium") or shutil.which("chromium-browser")
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-class _Server:
-    def __init__(self, data_dir: Path) -> None:
-        import uvicorn
-
-        from linkwright.server import create_app
-
-        self.port = _free_port()
-        config = uvicorn.Config(
-            create_app(data_dir), host="127.0.0.1", port=self.port, log_level="warning"
-        )
-        self.server = uvicorn.Server(config)
-        self.thread = threading.Thread(target=self.server.run, daemon=True)
-
-    def __enter__(self) -> str:
-        self.thread.start()
-        deadline = time.monotonic() + 30
-        while not self.server.started:
-            if time.monotonic() > deadline or not self.thread.is_alive():
-                raise RuntimeError("the workbench server did not start")
-            time.sleep(0.02)
-        return f"http://127.0.0.1:{self.port}"
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.should_exit = True
-        self.thread.join(10)
-
 
 @pytest.fixture(scope="session")
 def server_url(tmp_path_factory: pytest.TempPathFactory) -> Iterator[str]:
     """The address of a workbench served for this test session, with an empty data directory."""
-    with _Server(tmp_path_factory.mktemp("workbench-data")) as url:
+    with LocalServer(tmp_path_factory.mktemp("workbench-data")) as url:
         yield url
 
 
