@@ -1,1 +1,2 @@
-"""Browser tests of the workbench (a package, so its conftest does not clash with tests/conftest.py)."""
+"""Browser tests of the workbench: a package, so that its conftest and tests/conftest.py
+do not clash."""
