@@ -4,19 +4,12 @@ The picture, diagram, animation and CLI tests all run over these, and the README
 them (its file names are these keys).
 """
 
+from linkwright.server.scene import FAMILY_EXAMPLES as WORKBENCH_EXAMPLES
+
+# The workbench's choice for every family, the composed linkage split by space.
 FAMILY_EXAMPLES = {
-    "fourbar": "crank-rocker",
-    "slidercrank": "offset-slider-crank",
-    "geared-fivebar": "geared-fivebar",
-    "doubleslider": "elliptic-trammel",
-    "watt1": "watt1-example",
-    "watt2": "watt2-example",
-    "stephenson1": "stephenson1-example",
-    "stephenson3": "stephenson3-example",
-    "spherical-fourbar": "paper000-fig6-crank-rocker",
-    "spherical-sixbar": "paper000-fig8-sixbar",
-    "spherical-stephenson3": "paper001-stephenson3",
-    "linkage-plane": "jansen-leg",
+    **{k: v for k, v in WORKBENCH_EXAMPLES.items() if k != "linkage"},
+    "linkage-plane": WORKBENCH_EXAMPLES["linkage"],
     "linkage-sphere": "paper000-fig6-linkage",
 }
 

@@ -21,6 +21,7 @@ from linkwright.engine.evaluate import batch_shape
 __all__ = [
     "Mechanism",
     "circuit",
+    "circuits",
     "configurations",
     "input_range",
     "solve",
@@ -193,6 +194,32 @@ def circuit(
         order=order,
         circuit=circuit,
     )
+
+
+def circuits(
+    mechanism: Mechanism, samples: int = 360, *, order: int = 2
+) -> tuple[InputArcs, list[Motion]]:
+    """The input's arcs, and every closed circuit the linkage runs on its assembly.
+
+    One :func:`circuit` where the input turns fully; where it rocks, one per arc it rocks over
+    (each up and back, switching branch at its limits); none where it cannot be assembled.
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import FourBar
+    >>> arcs, motions = circuits(FourBar(A0=[0, 0], B0=[4, 0], crank=3.5, coupler=5, rocker=1), 8)
+    >>> bool(arcs.full), len(motions)
+    (False, 2)
+    >>> circuits(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3), 8)[1]
+    []
+    """
+    arcs = input_range(mechanism)
+    if bool(arcs.never):
+        return arcs, []
+    if bool(arcs.full):
+        return arcs, [circuit(mechanism, samples, order=order)]
+    count = int(arcs.count)
+    return arcs, [circuit(mechanism, samples, order=order, circuit=k) for k in range(count)]
 
 
 def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:

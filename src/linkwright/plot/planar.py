@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from linkwright.analysis import transmission_angle
 from linkwright.engine import Motion, evaluate
 from linkwright.geometry import plane
-from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, circuit, input_range
+from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, circuit, circuits
 
 __all__ = ["draw_linkage", "plot_curves", "plot_diagrams", "save_figure"]
 
@@ -184,15 +184,8 @@ class _Circuit:
 
 
 def _circuits(mechanism: Mechanism, samples: int, order: int = 1) -> list[_Circuit]:
-    arcs = input_range(mechanism)
-    if bool(arcs.never):
-        return []
-    if bool(arcs.full):
-        return [_Circuit(circuit(mechanism, samples, order=order), True)]
-    count = int(arcs.count)
-    return [
-        _Circuit(circuit(mechanism, samples, order=order, circuit=k), False) for k in range(count)
-    ]
+    arcs, motions = circuits(mechanism, samples, order=order)
+    return [_Circuit(m, bool(arcs.full)) for m in motions]
 
 
 def _pose(mechanism: Mechanism, theta: float, motion: Motion | None) -> Motion:
@@ -735,11 +728,11 @@ def plot_curves(
 
     # The mechanism's own mode solid, the other dashed on top of it: where the two coincide
     # (an input that rocks) both stay visible.
-    for circuits, color, ls, lw, s, z in (
+    for traced, color, ls, lw, s, z in (
         (mine, CURVE_COLOR, "-", 2.0, sign, 3.6),
         (theirs, OTHER_COLOR, (0, (5, 3)), 1.4, -sign, 3.7),
     ):
-        for k, c in enumerate(circuits):
+        for k, c in enumerate(traced):
             xy = c.motion.positions["P"][c.closed()]
             label = _sign_label(s) + ("" if k == 0 else f", circuit {k + 1}")
             ax.plot(xy[:, 0], xy[:, 1], color=color, ls=ls, lw=lw, label=label, zorder=z)

@@ -37,7 +37,7 @@ import numbers
 import numpy as np
 from matplotlib.figure import Figure
 
-from linkwright.engine import input_arcs
+from linkwright.engine import InputArcs, input_arcs
 from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, input_range, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.plot.generic import plot_linkage
@@ -55,9 +55,13 @@ class PlotError(ValueError):
     does not assemble, the inputs where it does)."""
 
 
-def _range_text(mechanism: Mechanism) -> str:
-    """Where the linkage assembles on its own assembly, in degrees."""
-    arcs = input_range(mechanism)
+def range_text(arcs: InputArcs) -> str:
+    """Where the linkage assembles on its own assembly (its :func:`input_range`), in degrees.
+
+    >>> from linkwright.mechanisms import FourBar
+    >>> range_text(input_range(FourBar(A0=[0, 0], B0=[4, 0], crank=3.5, coupler=5, rocker=1)))
+    'θ in [−106.1°, −64.1°] and [64.1°, 106.1°]'
+    """
     if bool(arcs.full):
         return "every input"
     spans = [
@@ -186,7 +190,7 @@ def plot_mechanism(
         if not bool(solve(mechanism, [at], order=0).valid[0]):
             raise PlotError(
                 f"at θ = {_deg(math.degrees(at))}° the linkage does not assemble on its own "
-                f"assembly; it does for {_range_text(mechanism)}"
+                f"assembly; it does for {range_text(input_range(mechanism))}"
             )
     samples = int(samples)
     if mechanism.space == "sphere":

@@ -39,9 +39,10 @@ from linkwright.io import (
     topology,
 )
 from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS
-from linkwright.mechanisms import Mechanism, circuit, input_range, solve
+from linkwright.mechanisms import Mechanism, circuits, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.plot.diagrams import FAMILY_NAMES, DiagramError, diagram_series
+from linkwright.plot.view import range_text
 
 __all__ = [
     "DIAGRAM_KINDS",
@@ -356,17 +357,6 @@ def _limit_text(theta_deg: float, changed: list[str], dyads: dict[str, Any], sph
     )
 
 
-def _circuits(mechanism: Mechanism, samples: int) -> tuple[Any, list[Any]]:
-    """The input's arcs, and every circuit the linkage runs on them."""
-    arcs = input_range(mechanism)
-    if bool(arcs.never):
-        return arcs, []
-    if bool(arcs.full):
-        return arcs, [circuit(mechanism, samples, order=0)]
-    count = int(arcs.count)
-    return arcs, [circuit(mechanism, samples, order=0, circuit=k) for k in range(count)]
-
-
 def _circuit_json(
     motion: Any, dyads: dict[str, Any], sphere: bool, full: bool, centre: np.ndarray | None
 ) -> tuple[dict[str, Any], list[tuple[int, float, str]]]:
@@ -525,7 +515,7 @@ def scene(
     traced_variants: list[tuple[str, dict[str, int], bool, Any, list[Any]]] = []
     try:
         for label, signs, variant, own in _variants(doc):
-            arcs, motions = _circuits(variant.mechanism, samples)
+            arcs, motions = circuits(variant.mechanism, samples, order=0)
             if motions:
                 traced_variants.append((label, signs, own, arcs, motions))
             else:
@@ -546,14 +536,20 @@ def scene(
         full = bool(arcs.full)
         if own:
             own_arcs = arcs
-        circuits = []
+        circuit_bodies = []
         for c, motion in enumerate(motions):
             body, lims = _circuit_json(motion, dyads, sphere, full, centre)
-            circuits.append(body)
+            circuit_bodies.append(body)
             for i, theta, text in lims:
                 limits.append({"input": theta, "mode": k, "circuit": c, "index": i, "text": text})
         modes.append(
-            {"label": label, "own": own, "assembly": signs, "full": full, "circuits": circuits}
+            {
+                "label": label,
+                "own": own,
+                "assembly": signs,
+                "full": full,
+                "circuits": circuit_bodies,
+            }
         )
     own_mode = next((m for m in modes if m["own"]), None)
     if message is None and not modes:
@@ -599,7 +595,7 @@ def scene(
         "guides": guides,
         "at": _number(pose_at) if pose_at is not None else None,
         "pose": pose,
-        "range": _range_text(own_arcs) if own_arcs is not None else "nowhere",
+        "range": range_text(own_arcs) if own_arcs is not None else "nowhere",
         "full": bool(own_mode["full"]) if own_mode is not None else False,
         "modes": modes,
         "never": never,
@@ -642,17 +638,6 @@ def _handles(
                     movable |= {g for g in ground if np.linalg.norm(moved[g] - base[g]) > 1e-9}
         _MOVABLE[key] = frozenset(movable)
     return [j for j in joints if j not in ground or j in _MOVABLE[key]]
-
-
-def _range_text(arcs: Any) -> str:
-    if bool(arcs.full):
-        return "every input"
-    spans = [
-        f"[{math.degrees(lo):.1f}°, {math.degrees(hi):.1f}°]".replace("-", _MINUS)
-        for lo, hi in zip(np.atleast_1d(arcs.lo), np.atleast_1d(arcs.hi), strict=True)
-        if math.isfinite(lo)
-    ]
-    return "θ in " + " and ".join(spans)
 
 
 # --------------------------------------------------------------------------------------------

@@ -55,7 +55,7 @@ from linkwright.io import (
     parse_document,
     save_document,
 )
-from linkwright.mechanisms import DoubleSlider, GearedFiveBar, Mechanism, circuit, input_range
+from linkwright.mechanisms import DoubleSlider, GearedFiveBar, Mechanism, circuit, circuits
 from linkwright.mechanisms import solve as solve_motion
 from linkwright.synthesis.ellipse import (
     EllipseError,
@@ -166,20 +166,10 @@ def _polyline(points: Array, valid: NDArray[np.bool_] | None = None) -> list[lis
     ]
 
 
-def _circuits(mechanism: Mechanism, samples: int) -> tuple[bool, list[Any]]:
-    """(does the input turn fully, every circuit of the own assembly) as plot/planar traces
-    them: one turn where the input turns fully, else each rocking arc up and back."""
-    arcs = input_range(mechanism)
-    if bool(arcs.never):
-        return False, []
-    if bool(arcs.full):
-        return True, [circuit(mechanism, samples, order=0)]
-    return False, [circuit(mechanism, samples, order=0, circuit=k) for k in range(int(arcs.count))]
-
-
 def _traced_curves(mechanism: Mechanism, samples: int) -> tuple[bool, bool, dict[str, list]]:
     """(assembles somewhere, turns fully, each traced joint's closed circuits joined by null)."""
-    full, motions = _circuits(mechanism, samples)
+    arcs, motions = circuits(mechanism, samples, order=0)
+    full = bool(arcs.full) and bool(motions)
     if not motions:
         return False, False, {}
     curves: dict[str, list] = {j: [] for j in mechanism.plan.traced}

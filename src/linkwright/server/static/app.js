@@ -1014,6 +1014,19 @@
     });
   }
 
+  // The dashed ring under the pointer while a joint is dragged (plane and sphere alike).
+  function drawDragPointer(ctx) {
+    if (!(state.gesture && state.gesture.kind === "joint" && state.gesture.mouse)) return;
+    const [x, y] = state.gesture.mouse;
+    ctx.save();
+    ctx.strokeStyle = "rgba(47,107,216,0.8)";
+    ctx.setLineDash([3, 3]);
+    ctx.beginPath();
+    ctx.arc(x, y, 9, 0, 2 * Math.PI);
+    ctx.stroke();
+    ctx.restore();
+  }
+
   function drawAll() {
     const sc = state.scene;
     const msg = $("canvas-message");
@@ -1483,16 +1496,7 @@
       drawSliderBlocks(ctx, sc, pose);
       drawJoints(ctx, sc, pose, toScreenPlane, null);
     }
-    if (state.gesture && state.gesture.kind === "joint" && state.gesture.mouse) {
-      const [x, y] = state.gesture.mouse;
-      ctx.save();
-      ctx.strokeStyle = "rgba(47,107,216,0.8)";
-      ctx.setLineDash([3, 3]);
-      ctx.beginPath();
-      ctx.arc(x, y, 9, 0, 2 * Math.PI);
-      ctx.stroke();
-      ctx.restore();
-    }
+    drawDragPointer(ctx);
     drawPick(ctx, toScreenPlane);
   }
 
@@ -1738,16 +1742,7 @@
         drawJoints(ctx, { ...sc, joints: [name] }, pose, project, null);
       }
     }
-    if (state.gesture && state.gesture.kind === "joint" && state.gesture.mouse) {
-      const [x, y] = state.gesture.mouse;
-      ctx.save();
-      ctx.strokeStyle = "rgba(47,107,216,0.8)";
-      ctx.setLineDash([3, 3]);
-      ctx.beginPath();
-      ctx.arc(x, y, 9, 0, 2 * Math.PI);
-      ctx.stroke();
-      ctx.restore();
-    }
+    drawDragPointer(ctx);
     drawPick(ctx, (p) => projectSphere(p, g));
     drawTriad(ctx, w, h);
   }
