@@ -83,7 +83,7 @@ def _root(
 # --------------------------------------------------------------------------------------------
 
 
-def _decimal(text: str, what: str) -> Decimal:
+def _decimal(text: str, what: str, *, angle: bool = False) -> Decimal:
     # ``what`` names an option (``--angles``) or a part of --input's range (``START``).
     where = f"{what}:" if what.startswith("--") else f"--input: {what}"
     try:
@@ -92,7 +92,21 @@ def _decimal(text: str, what: str) -> Decimal:
         raise CliError(f"{where} must be a number, got {text.strip()!r}") from None
     if not value.is_finite() or not math.isfinite(float(value)):
         raise CliError(f"{where} must be a finite number, got {text.strip()!r}")
+    _in_working_range(float(value), where, angle=angle)
     return value
+
+
+def _in_working_range(value: float, where: str, *, angle: bool = False) -> None:
+    """The documents' working range, for numbers given on the command line or in point files."""
+    from linkwright.io.documents import WORKING_RANGE
+
+    limit = WORKING_RANGE.max_angle if angle else WORKING_RANGE.max_size
+    if abs(value) > limit:
+        unit = " degrees" if angle else ""
+        raise CliError(
+            f"{where} must be at most {limit:g}{unit} in size, got {value:g} "
+            "(outside linkwright's working range)"
+        )
 
 
 def parse_inputs(spec: str) -> list[float]:
@@ -123,7 +137,8 @@ def parse_inputs(spec: str) -> list[float]:
         if len(parts) != 3:
             raise CliError(f"--input: expected START:STOP:STEP, got {spec!r}")
         start, stop, step = (
-            _decimal(p, w) for p, w in zip(parts, ("START", "STOP", "STEP"), strict=True)
+            _decimal(p, w, angle=True)
+            for p, w in zip(parts, ("START", "STOP", "STEP"), strict=True)
         )
         if step == 0:
             raise CliError("--input: STEP must not be zero")
@@ -136,7 +151,7 @@ def parse_inputs(spec: str) -> list[float]:
     items = text.split(",")
     if len(items) > MAX_SAMPLES:
         raise CliError(f"--input: more than {MAX_SAMPLES} samples")
-    return [float(_decimal(p, "each angle")) for p in items]
+    return [float(_decimal(p, "each angle", angle=True)) for p in items]
 
 
 def _load(file: str) -> Document:
@@ -611,6 +626,15 @@ def analyze(
         raise CliError(f"the analysis module is not available ({exc})") from None
     if mu is not None and doc.family != "spherical-fourbar":
         raise CliError(f"--mu: only a spherical-fourbar has a hinge-radius ratio ({doc.family})")
+    if mu is not None and math.isfinite(mu) and mu > 0:
+        from linkwright.io.documents import WORKING_RANGE
+
+        low = WORKING_RANGE.min_ratio
+        if not low <= mu <= 1 / low:
+            raise CliError(
+                f"--mu: must be from {low:g} to {1 / low:g}, got {mu:g} "
+                "(outside linkwright's working range for ratios)"
+            )
     try:
         report = run_analysis(doc.mechanism) if mu is None else run_analysis(doc.mechanism, mu=mu)
     except ValueError as exc:
@@ -768,6 +792,7 @@ def _at(value: float | None) -> float | None:
         return None
     if not math.isfinite(value):
         raise CliError(f"--at: must be a finite angle in degrees, got {value}")
+    _in_working_range(value, "--at:", angle=True)
     return math.radians(value)
 
 
@@ -990,6 +1015,8 @@ def read_points(path: Path, columns: tuple[int, ...] = (2,)) -> list[list[float]
                            f"{width}")  # fmt: skip
         if not all(math.isfinite(v) for v in values):
             raise CliError(f"{path}, line {number}: coordinates must be finite numbers")
+        for v in values:
+            _in_working_range(v, f"{path}, line {number}: a coordinate")
         rows.append(values)
         if len(rows) > MAX_POINTS:
             raise CliError(f"{path}: more than {MAX_POINTS} points")
@@ -1040,9 +1067,11 @@ def _documents(value: Any) -> Any:
     return value
 
 
-def _floats(text: str, what: str, count: int | None = None) -> list[float]:
+def _floats(
+    text: str, what: str, count: int | None = None, *, angle: bool = False
+) -> list[float]:
     items = [t for t in text.replace(";", ",").split(",") if t.strip()]
-    values = [float(_decimal(t.strip(), what)) for t in items]
+    values = [float(_decimal(t.strip(), what, angle=angle)) for t in items]
     if count is not None and len(values) != count:
         raise CliError(f"{what}: expected {count} numbers, got {len(values)}")
     return values
@@ -1598,7 +1627,7 @@ def synth_path(
         raise CliError("give at most one of --angles, --free-timing and --no-timing")
     timing = "prescribed" if angles is not None else "none" if no_timing else "free"
     pts = np.array(read_points(points, (2, 3)))
-    given = np.radians(_floats(angles, "--angles")) if angles is not None else None
+    given = np.radians(_floats(angles, "--angles", angle=True)) if angles is not None else None
     bounds = {
         name: (math.radians(lo), math.radians(hi))
         if name in ANGLE_BOUNDS or family == "spherical-fourbar"  # on the sphere: all angles

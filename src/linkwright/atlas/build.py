@@ -249,6 +249,7 @@ def build(
     digests = store.finished_shards(root, sizes)
     todo = [i for i in range(len(sizes)) if i not in digests]
     resumed = len(digests)
+    computed = sum(sizes[i] for i in todo)
     if workers is None:
         workers = 0 if len(todo) <= 1 else (os.cpu_count() or 1)
     if workers < 0:
@@ -279,7 +280,6 @@ def build(
     t_all = time.perf_counter() - t0
     if progress:
         progress(1.0)
-    computed = spec.count - sum(sizes[i] for i in range(resumed))
     manifest = {
         "spec": spec.as_dict(),
         "params": list(PARAMS[family]),

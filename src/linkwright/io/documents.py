@@ -157,6 +157,7 @@ __all__ = [
     "JOINT_SPECS",
     "KINDS",
     "SPHERE_JOINT_SPECS",
+    "WORKING_RANGE",
     "Document",
     "DocumentError",
     "FamilySpec",
@@ -173,6 +174,34 @@ __all__ = [
 
 FORMAT = "linkwright/1"
 _TOP_LEVEL = ("format", "title", "units", "mechanism")
+
+
+@dataclass(frozen=True)
+class WorkingRange:
+    """Where a document's numbers must lie for float64 arithmetic on them to mean something.
+
+    A number outside is refused with its field's path, not solved into overflow, underflow or
+    noise: 1e300 squares to infinity, 1e-300 to zero, and a link 1e-12 of the linkage's size
+    keeps four digits after the positions' rounding. Lengths and coordinates are in the
+    document's own units; the bounds leave any sensible unit (nanometres to kilometres) room.
+    """
+
+    max_size: float = 1e12
+    """Largest length, coordinate or coupler offset, in the document's units."""
+    min_length: float = 1e-12
+    """Smallest length, in the document's units."""
+    min_share: float = 1e-9
+    """Smallest length, and smallest distance between pivots that must differ, as a share of the
+    linkage's size (its largest length or coordinate): float64 then keeps about seven digits."""
+    max_angle: float = 1e6
+    """Largest angle in degrees: beyond it the fraction of a turn keeps fewer than ten digits."""
+    min_arc: float = 1e-6
+    """How close (degrees) a spherical link's arc may come to 0 or to 180."""
+    min_ratio: float = 1e-6
+    """Smallest size of a gear ratio (and 1 / the largest)."""
+
+
+WORKING_RANGE = WorkingRange()
 
 
 class DocumentError(ValueError):
@@ -232,6 +261,18 @@ def _number(value: Any, path: str, what: str) -> float:
     return x
 
 
+def _sized(value: Any, path: str, what: str) -> float:
+    """A number no larger than the working range allows (a length, coordinate or offset)."""
+    x = _number(value, path, what)
+    if abs(x) > WORKING_RANGE.max_size:
+        raise DocumentError(
+            path,
+            f"must be at most {WORKING_RANGE.max_size:g} in size, got {_show(value)} "
+            "(outside linkwright's working range: use larger units)",
+        )
+    return x
+
+
 def _table(value: Any, path: str, what: str) -> Mapping[str, Any]:
     if not isinstance(value, Mapping):
         raise DocumentError(path, f"must be {what}, got {_show(value)}")
@@ -258,18 +299,31 @@ def _parse_point(value: Any, path: str) -> list[float]:
     what = "a point [x, y]"
     if not isinstance(value, list | tuple) or len(value) != 2:
         raise DocumentError(path, f"must be {what}, got {_show(value)}")
-    return [_number(c, f"{path}[{i}]", "a number") for i, c in enumerate(value)]
+    return [_sized(c, f"{path}[{i}]", "a number") for i, c in enumerate(value)]
 
 
 def _parse_length(value: Any, path: str) -> float:
-    x = _number(value, path, "a positive number")
+    x = _sized(value, path, "a positive number")
     if x <= 0:
         raise DocumentError(path, f"must be a positive number, got {_show(value)}")
+    if x < WORKING_RANGE.min_length:
+        raise DocumentError(
+            path,
+            f"must be at least {WORKING_RANGE.min_length:g}, got {_show(value)} "
+            "(outside linkwright's working range: use smaller units)",
+        )
     return x
 
 
 def _parse_angle(value: Any, path: str) -> float:
-    return _number(value, path, "an angle in degrees")
+    x = _number(value, path, "an angle in degrees")
+    if abs(x) > WORKING_RANGE.max_angle:
+        raise DocumentError(
+            path,
+            f"must be at most {WORKING_RANGE.max_angle:g} degrees in size, got {_show(value)} "
+            "(reduce it by whole turns of 360)",
+        )
+    return x
 
 
 def _parse_sign(value: Any, path: str) -> int:
@@ -283,7 +337,7 @@ def _parse_uv(value: Any, path: str) -> dict[str, float]:
     table = _table(value, path, "a table {u = .., v = ..}")
     _check_keys(table, ("u", "v"), path)
     # Either coordinate may be left out: a point on the A→B line needs only u.
-    return {k: _number(table.get(k, 0.0), f"{path}.{k}", "a number") for k in ("u", "v")}
+    return {k: _sized(table.get(k, 0.0), f"{path}.{k}", "a number") for k in ("u", "v")}
 
 
 def _parse_line(value: Any, path: str) -> dict[str, Any]:
@@ -299,14 +353,15 @@ def _parse_line(value: Any, path: str) -> dict[str, Any]:
 
 
 def _parse_arc(value: Any, path: str) -> float:
-    # The radian check catches what the degree check cannot: a subnormal arc whose radians
-    # underflow to 0 (180 itself is the only degree value whose radians reach π).
     x = _number(value, path, "an arc in degrees")
-    if not (0 < x < 180 and 0 < math.radians(x) < math.pi):
+    # Nearer 0 or 180 the link's far end has no direction float64 can hold (and a subnormal
+    # arc's radians underflow to 0).
+    near = WORKING_RANGE.min_arc
+    if not near <= x <= 180 - near:
         raise DocumentError(
             path,
             f"must be an arc strictly between 0 and 180 degrees, got {_show(value)} "
-            "(a spherical link's central angle)",
+            f"(a spherical link's central angle, at least {near:g} from 0 and from 180)",
         )
     return x
 
@@ -344,16 +399,22 @@ def _parse_axis(value: Any, path: str) -> list[float]:
     what = "an axis [x, y, z] (a vector from the sphere's centre along the joint's axis)"
     if not isinstance(value, list | tuple) or len(value) != 3:
         raise DocumentError(path, f"must be {what}, got {_show(value)}")
-    axis = [_number(c, f"{path}[{i}]", "a number") for i, c in enumerate(value)]
+    axis = [_sized(c, f"{path}[{i}]", "a number") for i, c in enumerate(value)]
     if not any(axis):
         raise DocumentError(
             path, "must not be the zero vector [0, 0, 0] (its direction is the joint's axis)"
+        )
+    if max(map(abs, axis)) < WORKING_RANGE.min_length:
+        raise DocumentError(
+            path,
+            f"must have a component of at least {WORKING_RANGE.min_length:g} in size, got "
+            f"{_show(value)} (scale the vector up: only its direction counts)",
         )
     return axis
 
 
 def _parse_signed(value: Any, path: str) -> float:
-    return _number(value, path, "a number")
+    return _sized(value, path, "a number")
 
 
 def _parse_ratio(value: Any, path: str) -> float:
@@ -361,6 +422,13 @@ def _parse_ratio(value: Any, path: str) -> float:
     if x == 0:
         raise DocumentError(
             path, f"must be a nonzero number, got {_show(value)} (a ratio of 0 does not turn)"
+        )
+    low = WORKING_RANGE.min_ratio
+    if not low <= abs(x) <= 1 / low:
+        raise DocumentError(
+            path,
+            f"must be from {low:g} to {1 / low:g} in size, got {_show(value)} "
+            "(outside linkwright's working range for gear ratios)",
         )
     return x
 
@@ -689,7 +757,8 @@ def _doubleslider_lines(m: dict[str, Any]) -> None:
             f"must not be a multiple of 180 degrees, got {_show(m['alpha'])} "
             "(the slider lines would be parallel)",
         )
-    if m["p"] + m["q"] == 0:
+    size = max(abs(m["p"]), abs(m["q"]), abs(m["h"]), *map(abs, m["M"]))
+    if abs(m["p"] + m["q"]) <= WORKING_RANGE.min_share * size:
         raise DocumentError(
             "mechanism.q", "p + q must not be 0 (the sliders R and Q would coincide)"
         )
@@ -1134,12 +1203,60 @@ def _validate_mechanism(value: Any) -> dict[str, Any]:
     spec = FAMILY_SPECS[family]
     _check_keys(mech, ("family", *spec.names), "mechanism")
     out = _parse_fields(mech, spec.fields, "mechanism", {"family": family})
+    lengths, size = _planar_dimensions(out, spec)
+    least = WORKING_RANGE.min_share * size
     for name, other, why in spec.distinct:
-        if out[name] == out[other]:
-            raise DocumentError(f"mechanism.{name}", f"coincides with mechanism.{other} ({why})")
+        if math.dist(out[name], out[other]) <= least:
+            close = "" if out[name] == out[other] else f"within {least:.3g}, "
+            raise DocumentError(
+                f"mechanism.{name}", f"coincides with mechanism.{other} ({close}{why})"
+            )
+    for path, length in lengths:
+        if length < least:
+            raise DocumentError(
+                path,
+                f"is {_show(length)}, under {WORKING_RANGE.min_share:g} of the linkage's size "
+                f"{size:.6g} (outside linkwright's working range: float64 would leave it too "
+                "few digits; make it longer or the rest smaller)",
+            )
     for check in spec.checks:
         check(out)
     return out
+
+
+_COORDINATE_KINDS = ("point", "uv", "line", "number")
+
+
+def _planar_dimensions(
+    mech: dict[str, Any], spec: FamilySpec
+) -> tuple[list[tuple[str, float]], float]:
+    """A planar linkage's lengths (with their paths) and its size: the largest length or
+    coordinate magnitude, which the working range's ``min_share`` is a share of."""
+    lengths: list[tuple[str, float]] = []
+    magnitudes: list[float] = [0.0]
+
+    def collect(fields: tuple[FieldSpec, ...], values: Mapping[str, Any], path: str) -> None:
+        for f in fields:
+            value = values[f.name]
+            if f.kind == "length":
+                lengths.append((f"{path}.{f.name}", value))
+                magnitudes.append(value)
+            elif f.kind in _COORDINATE_KINDS:
+                magnitudes.extend(abs(x) for x in _numbers_in(value))
+            elif f.kind == "joints" and values.get("space") == "plane":
+                for i, joint in enumerate(value):
+                    collect(JOINT_SPECS[joint["type"]], joint, f"{path}.joints[{i}]")
+
+    collect(spec.fields, mech, "mechanism")
+    return lengths, max(magnitudes)
+
+
+def _numbers_in(value: Any) -> list[float]:
+    if isinstance(value, Mapping):
+        return [x for v in value.values() for x in _numbers_in(v)]
+    if isinstance(value, list | tuple):
+        return [x for v in value for x in _numbers_in(v)]
+    return [value] if isinstance(value, float | int) and not isinstance(value, bool) else []
 
 
 def _build(mech: Mapping[str, Any]) -> Mechanism:
