@@ -734,6 +734,11 @@ def serve(
         raise CliError(f"--data-dir: cannot use {root}: {exc.strerror or exc}") from None
     _check_listen(host, port)
     shown = f"[{host}]" if ":" in host else host
+    if not _loopback(host):
+        sys.stderr.write(
+            f"warning: listening on {host}: anyone who can reach this machine can use the "
+            "workbench and its library (it has no login)\n"
+        )
     sys.stdout.write(
         f"linkwright workbench on http://{shown}:{port}  (library in {root}; Ctrl-C stops it)\n"
     )
@@ -744,6 +749,18 @@ def serve(
         server.run()
     except (OSError, SystemExit):
         raise CliError(f"--port: cannot listen on {host}:{port}") from None
+
+
+def _loopback(host: str) -> bool:
+    """Whether ``host`` names only this machine (every address it resolves to is loopback)."""
+    import ipaddress
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
+        return all(ipaddress.ip_address(info[4][0].split("%")[0]).is_loopback for info in infos)
+    except (OSError, ValueError):
+        return False
 
 
 def _check_listen(host: str, port: int) -> None:

@@ -93,6 +93,16 @@ def _deg(x: Any) -> float | None:
     return _num(np.degrees(float(x)))
 
 
+def _extreme(values: Any, largest: bool) -> float:
+    """The least or greatest finite value, NaN when there is none (every sample at a toggle,
+    say) rather than NumPy's all-NaN warning."""
+    finite = np.asarray(values, dtype=float)
+    finite = finite[np.isfinite(finite)]
+    if finite.size == 0:
+        return math.nan
+    return float(finite.max() if largest else finite.min())
+
+
 def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> dict[str, Any]:
     """The kinematic report of any single linkage the engine builds (degrees; JSON-ready).
 
@@ -138,7 +148,8 @@ def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> di
     motion = circuit(mechanism, samples, order=1)
     angles = dyad_transmission_angles(mechanism, motion)
     report["transmission_angle_deg"] = {
-        name: {"min": _deg(np.nanmin(a)), "max": _deg(np.nanmax(a))} for name, a in angles.items()
+        name: {"min": _deg(_extreme(a, False)), "max": _deg(_extreme(a, True))}
+        for name, a in angles.items()
     }
     traced: dict[str, Any] = {}
     for joint in plan.traced:
@@ -151,8 +162,8 @@ def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> di
         speed = point_speed(motion, joint)
         traced[joint] = {
             "path_length": _num(length),
-            "speed_min": _num(np.nanmin(speed)),
-            "speed_max": _num(np.nanmax(speed)),
+            "speed_min": _num(_extreme(speed, False)),
+            "speed_max": _num(_extreme(speed, True)),
         }
     report["traced"] = traced
     report["samples"] = samples

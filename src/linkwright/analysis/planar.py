@@ -375,11 +375,16 @@ def coefficients(
     rocking = arcs.full & ~ext["turns"]
     double = arcs.full & ext["turns"]
     nan = np.full(np.shape(w_max), np.nan)
-    k_omega = np.where(rocking, w_max * phi_psi / psi, np.where(double, w_max, nan))
-    k_eps = np.where(rocking, e_max * phi_psi**2 / psi, np.where(double, TWO_PI * e_max, nan))
-    k_p = np.where(rocking, p_max * phi_psi**3 / psi**2, np.where(double, TWO_PI * p_max, nan))
+    # A rocker whose swing or whose crank's share of the turn rounds to nothing (a crank a
+    # hair long beside the rest) has no finite coefficient: NaN, reported as no value.
+    swing = np.where(psi > 0, psi, np.nan)
+    share = np.minimum(phi_psi, TWO_PI - phi_psi)
+    share = np.where(share > 0, share, np.nan)
+    k_omega = np.where(rocking, w_max * phi_psi / swing, np.where(double, w_max, nan))
+    k_eps = np.where(rocking, e_max * phi_psi**2 / swing, np.where(double, TWO_PI * e_max, nan))
+    k_p = np.where(rocking, p_max * phi_psi**3 / swing**2, np.where(double, TWO_PI * p_max, nan))
     delta = np.where(double, w_hi - w_lo, nan)
-    ratio = np.maximum(phi_psi, TWO_PI - phi_psi) / np.minimum(phi_psi, TWO_PI - phi_psi)
+    ratio = np.maximum(phi_psi, TWO_PI - phi_psi) / share
     return {
         "K_omega": k_omega,
         "K_epsilon": k_eps,

@@ -749,13 +749,15 @@ _D0 = FieldSpec("D0", "point")
 
 
 def _doubleslider_lines(m: dict[str, Any]) -> None:
-    # The same bound as the DoubleSlider constructor's (|sin α| ≤ 1e-12), so that no alpha the
-    # document accepts is refused by the class, and the error names the document's field.
-    if abs(math.sin(math.radians(m["alpha"]))) <= 1e-12:
+    # Stricter than the DoubleSlider constructor's bound (|sin α| ≤ 1e-12), so that no alpha the
+    # document accepts is refused by the class, and the error names the document's field; the
+    # working range keeps the lines as far apart as a spherical arc from 0.
+    if abs(math.sin(math.radians(m["alpha"]))) < math.sin(math.radians(WORKING_RANGE.min_arc)):
         raise DocumentError(
             "mechanism.alpha",
             f"must not be a multiple of 180 degrees, got {_show(m['alpha'])} "
-            "(the slider lines would be parallel)",
+            f"(the slider lines would be parallel; keep them {WORKING_RANGE.min_arc:g} "
+            "degrees apart at least)",
         )
     size = max(abs(m["p"]), abs(m["q"]), abs(m["h"]), *map(abs, m["M"]))
     if abs(m["p"] + m["q"]) <= WORKING_RANGE.min_share * size:
