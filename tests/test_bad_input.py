@@ -348,6 +348,7 @@ ARGUMENT_CASES = [
     (["curve", "crank-rocker", "-n", "1"], "--points"),
     (["curve", "crank-rocker", "-n", "many"], "--points"),
     (["curve", "crank-rocker", "--csv", "--json"], "cannot be used together"),
+    (["curve", "crank-rocker", "--spacing", "arc"], "--spacing: must be input or path"),
     (["plot", "crank-rocker", "--at", "inf"], "--at"),
     (["plot", "crank-rocker", "--at", "1e300"], "working range"),
     (["plot", "crank-rocker", "--out", "x.jpg"], "--out"),

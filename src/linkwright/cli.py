@@ -543,14 +543,25 @@ def curve(
             help="Samples over the whole circuit.",
         ),
     ] = 360,
+    spacing: Annotated[
+        str,
+        typer.Option(
+            "--spacing",
+            metavar="input|path",
+            help="input: even steps of the input (sin² between limits); path: even steps "
+            "along the path, which keeps every step short near a change point.",
+        ),
+    ] = "input",
     as_csv: Annotated[bool, typer.Option("--csv", help="Print CSV.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """The path of the traced point P over the whole closed circuit."""
     if as_csv and as_json:
         raise CliError("--csv and --json cannot be used together")
+    if spacing not in ("input", "path"):
+        raise CliError(f"--spacing: must be input or path, got {spacing!r}")
     doc = _load(file)
-    result = curve_document(doc, points)
+    result = curve_document(doc, points, spacing=spacing)
     if as_json:
         sys.stdout.write(_dump(result))
         return
@@ -574,7 +585,7 @@ def curve(
     sys.stdout.write("\n".join(out) + "\n")
 
 
-def curve_document(doc: Document, points: int = 360) -> dict[str, Any]:
+def curve_document(doc: Document, points: int = 360, *, spacing: str = "input") -> dict[str, Any]:
     """The ``curve`` command's JSON-ready result: the traced point over the closed circuit."""
     import numpy as np
 
@@ -582,7 +593,7 @@ def curve_document(doc: Document, points: int = 360) -> dict[str, Any]:
     from linkwright.mechanisms import circuit, input_range
 
     mech = doc.mechanism
-    motion = circuit(mech, points, order=0)
+    motion = circuit(mech, points, order=0, spacing=spacing)
     if not bool(np.any(motion.valid)):
         raise CliError(f"{doc.family}: the linkage cannot be assembled at any input")
     joint = mech.traced_joint
@@ -1084,9 +1095,7 @@ def _documents(value: Any) -> Any:
     return value
 
 
-def _floats(
-    text: str, what: str, count: int | None = None, *, angle: bool = False
-) -> list[float]:
+def _floats(text: str, what: str, count: int | None = None, *, angle: bool = False) -> list[float]:
     items = [t for t in text.replace(";", ",").split(",") if t.strip()]
     values = [float(_decimal(t.strip(), what, angle=angle)) for t in items]
     if count is not None and len(values) != count:

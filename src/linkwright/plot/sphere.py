@@ -39,7 +39,7 @@ from linkwright.engine import (
 )
 from linkwright.geometry import sphere
 from linkwright.geometry.sphere import lambert_azimuthal
-from linkwright.mechanisms import Mechanism, circuit, input_range, solve
+from linkwright.mechanisms import Mechanism, circuits, solve
 from linkwright.plot.generic import (
     DEAD_COLOR,
     MODE_COLORS,
@@ -440,11 +440,7 @@ def _links(mechanism: Mechanism) -> tuple[list[tuple[str, str]], list[tuple[str,
 
 def _circuits(mechanism: Mechanism, samples: int) -> tuple[InputArcs, list[Motion]]:
     """The admissible input arcs and every circuit (none where nothing assembles)."""
-    arcs = input_range(mechanism)
-    if bool(arcs.never):
-        return arcs, []
-    count = 1 if bool(arcs.full) else int(arcs.count)
-    return arcs, [circuit(mechanism, samples, order=0, circuit=k) for k in range(count)]
+    return circuits(mechanism, samples, order=0)
 
 
 def default_view(mechanism: Mechanism, *, samples: int = 180) -> Array:
