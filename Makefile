@@ -45,6 +45,7 @@ bench: $(BENCH_STAMP)
 	$(BIN)/python bench/synthesis.py
 	$(BIN)/python bench/atlas.py
 	$(BIN)/python bench/workbench.py
+	$(BIN)/python bench/load.py
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -25,6 +25,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
+from test_documents import with_change as changed
 
 from linkwright.cli import main
 from linkwright.io.documents import WORKING_RANGE, dumps_toml
@@ -69,19 +70,6 @@ def assert_clean(status: int, out: str, err: str, caught: list[str], context: ob
         assert not NOT_A_NUMBER.search(out), NOT_A_NUMBER.search(out)
     else:
         assert_refused(status, err)
-
-
-def changed(doc: dict, path: str, value: object = ..., *, delete: bool = False) -> dict:
-    doc = copy.deepcopy(doc)
-    *parents, last = path.split(".")
-    table = doc
-    for key in parents:
-        table = table[key]
-    if delete:
-        del table[last]
-    else:
-        table[last] = value
-    return doc
 
 
 def write(tmp_path: Path, doc: object, suffix: str = ".json") -> Path:

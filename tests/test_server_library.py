@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import json
+import math
 import os
 import random
 import signal
@@ -560,7 +561,8 @@ def test_api_export_names_the_file_in_unicode(client: TestClient) -> None:
     disposition = client.get(f"/api/library/{eid}/export").headers["content-disposition"]
     ascii_part, utf8_part = disposition.split("; filename*=UTF-8''")
     assert ascii_part == 'attachment; filename="Kurbelschwinge _bung_ _ 2.toml"'
-    assert unquote(utf8_part) == name + ".toml"
+    # The UTF-8 name keeps its letters and quotes, not its slash (never a path in a file name).
+    assert unquote(utf8_part) == name.replace("/", "_") + ".toml"
 
 
 @pytest.mark.parametrize("example", list_examples())
@@ -668,7 +670,8 @@ fourbars = st.builds(
     coordinate,
     st.sampled_from([1, -1]),
     st.none() | st.text(max_size=40),
-).filter(lambda d: d["mechanism"]["A0"] != d["mechanism"]["B0"])
+    # Pivots closer than 1e-9 of the linkage's size (at most 1e3 here) coincide for the parser.
+).filter(lambda d: math.dist(d["mechanism"]["A0"], d["mechanism"]["B0"]) > 1e-5)
 
 
 @settings(max_examples=40, deadline=None)

@@ -735,12 +735,14 @@ def serve(
     try:
         import uvicorn
 
-        from linkwright.server import create_app, default_data_dir
+        from linkwright.server import LOOPBACK_HOSTS, create_app, default_data_dir
     except ImportError as exc:
         raise CliError(f"the workbench needs its web server packages ({exc})") from None
     root = data_dir if data_dir is not None else default_data_dir()
     try:
-        application = create_app(root)
+        # On loopback, only the loopback names may reach it (no DNS rebinding from a page).
+        hosts = LOOPBACK_HOSTS if _loopback(host) else None
+        application = create_app(root, allowed_hosts=hosts)
     except OSError as exc:
         raise CliError(f"--data-dir: cannot use {root}: {exc.strerror or exc}") from None
     _check_listen(host, port)

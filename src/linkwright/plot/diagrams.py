@@ -468,6 +468,8 @@ def _clip_limit(panel: _Panel, run: _Run) -> float | None:
         for leg in run.legs:
             x = run.x[leg.circuit][leg.index]
             y = np.abs(s.values[leg.circuit][leg.index])
+            if not np.isfinite(x).any():  # a leg with no assembled sample has no extent
+                continue
             lo, hi = float(np.nanmin(x)), float(np.nanmax(x))
             margin = 0.1 * (hi - lo)
             inner.append(y[(x - lo >= margin) & (hi - x >= margin)])

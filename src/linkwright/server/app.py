@@ -3,68 +3,190 @@
 :func:`create_app` builds a FastAPI application over one data directory (the library's SQLite
 file and the built-in atlases live there). Every failure a user can cause answers JSON
 ``{"error": "..."}`` with one line naming the field and the problem: a ``ValueError`` (a bad
-document, an unreachable drag, points that are not a curve) is 422, a ``LookupError`` (an unknown
-library entry or example) is 404, a name clash is 409; a request body over
-:data:`MAX_BODY_BYTES` is 413. Nothing answers a traceback.
+document, an unreachable drag, points that are not a curve, a value over a limit) is 422, a
+``LookupError`` (an unknown library entry or example) or an unknown path is 404, a name clash is
+409; a request body over :data:`MAX_BODY_BYTES` is 413; a write sent by another site's page is
+403 (:mod:`linkwright.server.guard`). Nothing answers a traceback. Every bound on a request is in
+:mod:`linkwright.server.limits` and served at ``GET /api/limits``.
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Iterable
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 from fastapi import FastAPI, Request
+from fastapi import Path as PathParam
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import compile_path
 
 from linkwright import __version__
 from linkwright.io import document_to_dict, list_examples, load_example
-from linkwright.server import library, scene, tools
+from linkwright.server import library, limits, scene, tools
+from linkwright.server.guard import LOOPBACK_HOSTS, Guard
+from linkwright.server.schema import DocumentBody, document_examples, examples
 
-__all__ = ["MAX_BODY_BYTES", "create_app"]
+__all__ = ["LOOPBACK_HOSTS", "MAX_BODY_BYTES", "create_app"]
 
-MAX_BODY_BYTES = 2_000_000
-"""Largest request body accepted (a drawn curve of 20,000 points fits several times over)."""
+MAX_BODY_BYTES = limits.BODY_BYTES.value
+"""Largest request body accepted (:data:`linkwright.server.limits.BODY_BYTES`)."""
 
 _log = logging.getLogger("linkwright.server")
 
 
+class ErrorBody(BaseModel):
+    """Every error the workbench answers: one line naming the field and the problem."""
+
+    error: str
+
+
+class Health(BaseModel):
+    ok: bool
+    version: str
+
+
+class LimitEntry(BaseModel):
+    """One row of ``GET /api/limits`` (:class:`linkwright.server.limits.Limit`)."""
+
+    value: int
+    least: int | None
+    unit: str
+    applies: str
+    why: str
+
+
+_DOCS = document_examples()
+
+
 class SceneRequest(BaseModel):
-    document: dict[str, Any]
-    samples: int = Field(360, ge=8, le=4096)
+    model_config = ConfigDict(
+        json_schema_extra=examples(*({"document": d, "samples": 48} for d in _DOCS))
+    )
+
+    document: DocumentBody
+    samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value)
     at: float | None = None
     diagrams: bool = True
 
 
 class DragRequest(BaseModel):
-    document: dict[str, Any]
-    joint: str = Field(min_length=1, max_length=64)
+    model_config = ConfigDict(
+        json_schema_extra=examples(
+            {"document": _DOCS[0], "joint": "P", "to": [1.0, 3.0], "at": 30.0}
+        )
+    )
+
+    document: DocumentBody
+    joint: str = Field(min_length=1, max_length=limits.TEXT.value)
     to: list[float] = Field(min_length=2, max_length=3)
     at: float = 0.0
+
+
+_ERRORS: dict[int | str, dict[str, Any]] = {
+    "4XX": {
+        "model": ErrorBody,
+        "description": "The request cannot be served as sent: 400 unreadable, 403 sent by "
+        "another site's page, 404 no such entry, 409 name taken, 413 body too large, 421 wrong "
+        "host, 422 invalid (the message names the field; GET /api/limits lists every limit).",
+    }
+}
 
 
 def _static_dir() -> Path:
     return Path(str(resources.files("linkwright.server") / "static"))
 
 
-def _error(status: int, message: str) -> JSONResponse:
-    return JSONResponse({"error": message}, status_code=status)
+def _error(status: int, message: str, headers: dict[str, str] | None = None) -> JSONResponse:
+    # One line, whatever a message quoted from the request held.
+    line = " ".join(message.splitlines()) or f"HTTP {status}"
+    return JSONResponse({"error": line}, status_code=status, headers=headers)
+
+
+def _shown(value: Any, most: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= most else text[: most - 1] + "…"
+
+
+def _describe(err: dict[str, Any]) -> str:
+    """One pydantic error as "field: problem", limits phrased as the API's other messages."""
+    loc = [str(p) for p in err.get("loc", ()) if p != "body"]
+    kind, ctx, got = err.get("type", ""), err.get("ctx") or {}, err.get("input")
+    if kind == "json_invalid":
+        where = f" (at character {loc[-1]})" if loc else ""
+        return f"body: invalid JSON: {ctx.get('error', 'cannot be read')}{where}"
+    where = ".".join(loc) or "body"
+    if not loc and kind in ("model_attributes_type", "dict_type", "model_type"):
+        return "body: expected a JSON object (sent as Content-Type: application/json)"
+    if kind == "missing":
+        return f"{where}: missing required field"
+    if kind == "less_than_equal":
+        return f"{where}: must be at most {ctx['le']}, got {_shown(got)}"
+    if kind == "greater_than_equal":
+        return f"{where}: must be at least {ctx['ge']}, got {_shown(got)}"
+    if kind in ("too_long", "string_too_long"):
+        unit = "characters" if kind == "string_too_long" else "items"
+        size = len(got) if isinstance(got, str | list) else ctx.get("actual_length")
+        shown = f"{size:,}" if isinstance(size, int) else "too many"
+        return f"{where}: {shown} {unit}, at most {ctx['max_length']:,} allowed"
+    return f"{where}: {err.get('msg', 'invalid')}"
 
 
 def _validation_message(exc: RequestValidationError) -> str:
-    parts = []
-    for err in exc.errors()[:3]:
-        where = ".".join(str(p) for p in err.get("loc", ()) if p != "body") or "body"
-        parts.append(f"{where}: {err.get('msg', 'invalid')}")
-    return "; ".join(parts)
+    return "; ".join(_describe(err) for err in exc.errors()[:3])
 
 
-def create_app(data_dir: str | Path | None = None) -> FastAPI:
+def _allow(request: Request, exc: StarletteHTTPException) -> str:
+    """The methods a 405's path takes. Starlette names those of the first route matching the
+    path only; FastAPI makes one route per method, so the schema's paths are asked instead."""
+    app = request.app
+    table = getattr(app.state, "methods_by_path", None)
+    if table is None:
+        table = [
+            (compile_path(path)[0], {m.upper() for m in operations})
+            for path, operations in app.openapi().get("paths", {}).items()
+        ]
+        app.state.methods_by_path = table
+    methods: set[str] = set()
+    for pattern, allowed in table:
+        if pattern.match(request.url.path):
+            methods |= allowed
+    if methods:
+        return ", ".join(sorted(methods))
+    return next((v for k, v in (exc.headers or {}).items() if k.lower() == "allow"), "")
+
+
+def _http_message(request: Request, exc: StarletteHTTPException) -> str:
+    path = _shown(request.url.path, 120)
+    if exc.status_code == 404:
+        return f"path: nothing at {path}"
+    if exc.status_code == 405:
+        allowed = _allow(request, exc)
+        return f"method: {request.method} is not allowed at {path} (allowed: {allowed or 'none'})"
+    if exc.status_code == 400 and str(exc.detail).startswith("There was an error parsing"):
+        return "body: cannot be read as JSON (malformed, or a number too long to read)"
+    return f"request: {exc.detail}"
+
+
+def create_app(
+    data_dir: str | Path | None = None, *, allowed_hosts: Iterable[str] | None = None
+) -> FastAPI:
     """The workbench application over ``data_dir`` (default: :func:`default_data_dir`).
+
+    Parameters
+    ----------
+    data_dir : where the library and the atlas live; nothing else is read or written (the
+        page and the examples come from the package), and nothing a client sends is used as a
+        path.
+    allowed_hosts : the only ``Host`` names answered (others get 421); a server bound to the
+        loopback address passes :data:`LOOPBACK_HOSTS`, which defeats DNS rebinding. None
+        answers any.
 
     Examples
     --------
@@ -75,21 +197,21 @@ def create_app(data_dir: str | Path | None = None) -> FastAPI:
     True
     >>> client.post("/api/scene", json={"document": {"mechanism": {"family": "fourbar"}}}).json()
     {'error': 'document: format: missing required field (expected "linkwright/1")'}
+    >>> client.post("/api/scene", json={"document": {}, "samples": 5000}).json()
+    {'error': 'samples: must be at most 4096, got 5000'}
     """
     root = Path(data_dir) if data_dir is not None else default_data_dir()
     root.mkdir(parents=True, exist_ok=True)
-    app = FastAPI(title="linkwright workbench", version=__version__)
+    app = FastAPI(title="linkwright workbench", version=__version__, responses=_ERRORS)
     app.state.data_dir = root
     app.state.library = library.Library(root / "library.sqlite3")
+    app.add_middleware(Guard, allowed_hosts=allowed_hosts)
 
-    @app.middleware("http")
-    async def _limit_body(request: Request, call_next: Any) -> Any:
-        length = request.headers.get("content-length")
-        if length is not None and length.isdigit() and int(length) > MAX_BODY_BYTES:
-            return _error(
-                413, f"request body: {int(length):,} bytes, over the {MAX_BODY_BYTES:,} allowed"
-            )
-        return await call_next(request)
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        allowed = _allow(request, exc) if exc.status_code == 405 else ""
+        headers = {"Allow": allowed} if allowed else None
+        return _error(exc.status_code, _http_message(request, exc), headers)
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(_: Request, exc: RequestValidationError) -> JSONResponse:
@@ -113,16 +235,24 @@ def create_app(data_dir: str | Path | None = None) -> FastAPI:
     def index() -> FileResponse:
         return FileResponse(_static_dir() / "index.html", media_type="text/html")
 
-    @app.get("/api/health")
+    @app.get("/api/health", response_model=Health)
     def health() -> dict[str, Any]:
         return {"ok": True, "version": __version__}
+
+    @app.get("/api/limits", response_model=dict[str, LimitEntry])
+    def limits_route() -> dict[str, dict[str, Any]]:
+        """Every limit on a request: its value (and least value), unit, the fields it applies
+        to and why it has that value."""
+        return limits.as_json()
 
     @app.get("/api/families")
     def families() -> list[dict[str, Any]]:
         return scene.families()
 
     @app.get("/api/families/{family}/default")
-    def family_default(family: str) -> dict[str, Any]:
+    def family_default(
+        family: Annotated[str, PathParam(examples=list(scene.FAMILY_EXAMPLES))],
+    ) -> dict[str, Any]:
         return scene.family_document(family)
 
     @app.get("/api/examples")
@@ -130,14 +260,21 @@ def create_app(data_dir: str | Path | None = None) -> FastAPI:
         return scene.examples()
 
     @app.get("/api/examples/{name}")
-    def example(name: str) -> dict[str, Any]:
+    def example(
+        name: Annotated[str, PathParam(examples=["crank-rocker", "jansen-leg.toml"])],
+    ) -> dict[str, Any]:
+        # Only a bundled example's name is ever read, never a path made from the request.
         if name.removesuffix(".toml") not in list_examples():
-            raise LookupError(f"example: no bundled example named {name!r}")
+            raise LookupError(f"example: no bundled example named {_shown(name)}")
         return document_to_dict(load_example(name))
 
     # A scene is ~10^4 numbers: orjson writes it in well under a millisecond, where FastAPI's
     # encoder and json.dumps take ten (the redraw's latency budget is 50 ms).
-    @app.post("/api/scene")
+    @app.post(
+        "/api/scene",
+        response_class=Response,
+        responses={200: {"content": {"application/json": {}}, "description": "The scene."}},
+    )
     def scene_route(body: SceneRequest) -> Response:
         result = scene.scene(
             body.document, samples=body.samples, at=body.at, diagrams=body.diagrams

@@ -32,15 +32,18 @@ from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
-from urllib.parse import quote
 
-from fastapi import APIRouter, File, Form, Request, UploadFile
+from fastapi import APIRouter, File, Form, Query, Request, UploadFile
+from fastapi import Path as PathParam
 from fastapi.responses import Response
-from pydantic import BaseModel
+from pydantic import BaseModel, ConfigDict, Field
 from starlette.concurrency import run_in_threadpool
 
 from linkwright.io import document_to_dict, parse_document
 from linkwright.io.documents import dumps_toml
+from linkwright.server import limits
+from linkwright.server.guard import attachment, shown_filename
+from linkwright.server.schema import DocumentBody, document_examples, examples
 
 __all__ = [
     "FORMATS",
@@ -53,8 +56,8 @@ __all__ = [
     "router",
 ]
 
-MAX_NAME = 200
-"""Longest entry name, in characters (after stripping)."""
+MAX_NAME = limits.NAME.value
+"""Longest entry name, in characters (after stripping): :data:`linkwright.server.limits.NAME`."""
 
 MAX_TEXT = 2_000_000
 """Longest document text :meth:`Library.import_text` reads, in characters."""
@@ -176,6 +179,10 @@ def _parse_text(text: str, fmt: str, source: str) -> Any:
             return tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise LibraryError(f"{source}: invalid TOML: {exc}") from None
+        except RecursionError:  # tomllib recurses once per nested array or inline table
+            raise LibraryError(f"{source}: invalid TOML: nested too deeply") from None
+        except ValueError:
+            raise LibraryError(f"{source}: invalid TOML: a number too long to read") from None
     try:
         return json.loads(text, object_pairs_hook=_no_duplicates)
     except json.JSONDecodeError as exc:
@@ -185,6 +192,8 @@ def _parse_text(text: str, fmt: str, source: str) -> Any:
         raise LibraryError(f"{source}: invalid JSON: {exc}") from None
     except RecursionError:
         raise LibraryError(f"{source}: invalid JSON: nested too deeply") from None
+    except ValueError:  # an integer of more digits than Python converts
+        raise LibraryError(f"{source}: invalid JSON: a number too long to read") from None
 
 
 def _sniff(text: str) -> str:
@@ -193,7 +202,9 @@ def _sniff(text: str) -> str:
 
 
 def _validated(document: Any, source: str = "document") -> tuple[dict[str, Any], str, str | None]:
-    """(canonical mapping, family, title) of a document; DocumentError naming the field."""
+    """(canonical mapping, family, title) of a document; LimitError for one over the request
+    limits, DocumentError naming the field."""
+    limits.check_document(document, source)
     doc = parse_document(document, source=source)
     return document_to_dict(doc), doc.family, doc.title
 
@@ -610,18 +621,37 @@ class Library:
 router = APIRouter()
 
 
+# The name's rule (NFC, stripped, no controls, at most MAX_NAME characters) is _check_name's; the
+# schema says the length, which the stripped name must keep.
+_NAME = Field(json_schema_extra={"minLength": 1, "maxLength": MAX_NAME})
+
+
+_DOC = document_examples()[0]
+
+
 class SaveRequest(BaseModel):
-    name: str
-    document: dict[str, Any]
+    model_config = ConfigDict(
+        json_schema_extra=examples({"name": "My four-bar", "document": _DOC, "overwrite": True})
+    )
+
+    name: str = _NAME
+    document: DocumentBody
     overwrite: bool = False
 
 
 class RenameRequest(BaseModel):
-    name: str
+    model_config = ConfigDict(json_schema_extra=examples({"name": "Renamed"}))
+
+    name: str = _NAME
 
 
 class UpdateRequest(BaseModel):
-    document: dict[str, Any]
+    model_config = ConfigDict(json_schema_extra=examples({"document": _DOC}))
+
+    document: DocumentBody
+
+
+EntryId = Annotated[str, PathParam(examples=["1"], description="An entry's id (digits).")]
 
 
 def _library(request: Request) -> Library:
@@ -634,15 +664,6 @@ def _blank(name: Any) -> bool:
     return name is None or (isinstance(name, str) and not name.strip())
 
 
-def _filename(name: str, fmt: str) -> str:
-    """A Content-Disposition value: an ASCII fallback and the UTF-8 name (RFC 6266)."""
-    ascii_name = re.sub(r"[^A-Za-z0-9._ -]+", "_", name).strip(" ._") or "mechanism"
-    return (
-        f'attachment; filename="{ascii_name}.{fmt}"; '
-        f"filename*=UTF-8''{quote(f'{name}.{fmt}', safe='')}"
-    )
-
-
 @router.get("/library")
 def list_route(request: Request) -> list[dict[str, Any]]:
     return _library(request).list()
@@ -653,7 +674,28 @@ def save_route(body: SaveRequest, request: Request) -> dict[str, Any]:
     return _library(request).save(body.name, body.document, body.overwrite)
 
 
-@router.post("/library/import")
+_IMPORT_JSON = {
+    "requestBody": {
+        "content": {
+            "application/json": {
+                "schema": {
+                    "type": "object",
+                    "properties": {
+                        "text": {"type": "string", "description": "The file's content."},
+                        "format": {"enum": ["toml", "json"]},
+                        "name": {"type": "string", "maxLength": MAX_NAME},
+                    },
+                    "required": ["text"],
+                    "additionalProperties": False,
+                    "examples": [{"text": json.dumps(_DOC), "format": "json"}],
+                }
+            }
+        }
+    }
+}
+
+
+@router.post("/library/import", openapi_extra=_IMPORT_JSON)
 async def import_route(
     request: Request,
     file: Annotated[UploadFile | None, File()] = None,
@@ -663,7 +705,9 @@ async def import_route(
     library = _library(request)
     if file is not None:
         data = await file.read(MAX_TEXT * 4 + 1)
-        filename = file.filename or "file"
+        # The name the client gave its file is shown in messages and may name the entry; it is
+        # never a path here.
+        filename = shown_filename(file.filename)
         if not format:
             suffix = Path(filename).suffix.lower()
             if suffix and suffix not in (".toml", ".json"):
@@ -702,32 +746,45 @@ async def import_route(
 
 
 @router.get("/library/{entry_id}")
-def get_route(entry_id: str, request: Request) -> dict[str, Any]:
+def get_route(entry_id: EntryId, request: Request) -> dict[str, Any]:
     return _library(request).get(_check_id(entry_id))
 
 
 @router.patch("/library/{entry_id}")
-def rename_route(entry_id: str, body: RenameRequest, request: Request) -> dict[str, Any]:
+def rename_route(entry_id: EntryId, body: RenameRequest, request: Request) -> dict[str, Any]:
     return _library(request).rename(_check_id(entry_id), body.name)
 
 
 @router.put("/library/{entry_id}")
-def update_route(entry_id: str, body: UpdateRequest, request: Request) -> dict[str, Any]:
+def update_route(entry_id: EntryId, body: UpdateRequest, request: Request) -> dict[str, Any]:
     return _library(request).update(_check_id(entry_id), body.document)
 
 
 @router.delete("/library/{entry_id}")
-def delete_route(entry_id: str, request: Request) -> dict[str, Any]:
+def delete_route(entry_id: EntryId, request: Request) -> dict[str, Any]:
     return {"deleted": _library(request).delete(_check_id(entry_id))}
 
 
-@router.get("/library/{entry_id}/export")
-def export_route(entry_id: str, request: Request, format: str = "toml") -> Response:
+@router.get(
+    "/library/{entry_id}/export",
+    response_class=Response,
+    responses={
+        200: {
+            "content": {f"{media}; charset=utf-8": {} for media in _MEDIA_TYPES.values()},
+            "description": "The entry's document as a file.",
+        }
+    },
+)
+def export_route(
+    entry_id: EntryId,
+    request: Request,
+    format: Annotated[str, Query(json_schema_extra={"enum": list(FORMATS)})] = "toml",
+) -> Response:
     fmt = _check_format(format)
     entry = _library(request).get(_check_id(entry_id))
     text = _file_text(entry["document"], fmt)
     return Response(
         text.encode("utf-8"),
         media_type=f"{_MEDIA_TYPES[fmt]}; charset=utf-8",
-        headers={"Content-Disposition": _filename(entry["name"], fmt)},
+        headers={"Content-Disposition": attachment(entry["name"], fmt)},
     )

@@ -36,18 +36,23 @@ def chromium_path() -> str | None:
 
 class LocalServer:
     """``with LocalServer(data_dir) as url:`` serves the workbench on a free loopback port in a
-    thread of this process, and stops it on leaving."""
+    thread of this process, and stops it on leaving. It listens on 127.0.0.1 only and answers
+    only the loopback names (:data:`~linkwright.server.LOOPBACK_HOSTS`), as ``linkwright serve``
+    does by default."""
 
     def __init__(self, data_dir: str | Path) -> None:
         import uvicorn
 
-        from linkwright.server import create_app
+        from linkwright.server import LOOPBACK_HOSTS, create_app
 
         with socket.socket() as s:
             s.bind(("127.0.0.1", 0))
             self.port = int(s.getsockname()[1])
         config = uvicorn.Config(
-            create_app(data_dir), host="127.0.0.1", port=self.port, log_level="warning"
+            create_app(data_dir, allowed_hosts=LOOPBACK_HOSTS),
+            host="127.0.0.1",
+            port=self.port,
+            log_level="warning",
         )
         self.server = uvicorn.Server(config)
         self.thread = threading.Thread(target=self.server.run, daemon=True)

@@ -38,11 +38,12 @@ from linkwright.io import (
     parse_document,
     topology,
 )
-from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS
+from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS, WORKING_RANGE
 from linkwright.mechanisms import Mechanism, circuits, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.plot.diagrams import FAMILY_NAMES, DiagramError, diagram_series
 from linkwright.plot.view import range_text
+from linkwright.server.limits import SAMPLES, check_document
 
 __all__ = [
     "DIAGRAM_KINDS",
@@ -269,9 +270,21 @@ def _number(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def _parse(document: Any) -> Document:
+def _space(doc: Document) -> str:
+    """The document's space, read from the document: a mechanism without a construction plan
+    (a spherical Stephenson III driven at FG) cannot tell its own."""
+    if doc.family in _SPHERE_FAMILIES:
+        return "sphere"
+    return str(doc.raw["mechanism"].get("space", "plane"))
+
+
+def _parse(document: Any, *, client: bool = False) -> Document:
+    """The document parsed; a ``client``'s document (not one made here from a parsed one) is
+    first held to the request limits."""
     if not isinstance(document, dict):
         raise DocumentError("document", f"must be a JSON object, got {type(document).__name__}")
+    if client:
+        check_document(document)
     return parse_document(document, source="document")
 
 
@@ -492,14 +505,16 @@ def scene(
     'This linkage cannot be assembled at any input angle, in any assembly mode: ...'
     """
     started = time.perf_counter()
-    if isinstance(samples, bool) or not isinstance(samples, int) or not 8 <= samples <= 4096:
-        raise ValueError(f"samples: must be a whole number from 8 to 4096, got {samples!r}")
+    low, high = SAMPLES.least, SAMPLES.value
+    if isinstance(samples, bool) or not isinstance(samples, int) or not low <= samples <= high:
+        raise ValueError(f"samples: must be a whole number from {low} to {high}, got {samples!r}")
     if at is not None and not math.isfinite(at):
         raise ValueError(f"at: must be a finite angle in degrees, got {at!r}")
-    doc = _parse(document)
+    doc = _parse(document, client=True)
     raw = document_to_dict(doc)
     mech = doc.mechanism
-    sphere = mech.space == "sphere"
+    space = _space(doc)
+    sphere = space == "sphere"
     bodies, guides, ground = _topology_json(mech, sphere)
     dyads = _dyads(mech)
     try:
@@ -584,8 +599,8 @@ def scene(
         "title": doc.title,
         "units": doc.units,
         "family": doc.family,
-        "family_name": _family_name(doc.family, mech.space),
-        "space": mech.space,
+        "family_name": _family_name(doc.family, space),
+        "space": space,
         "fields": fields(raw),
         "joints": joints,
         "fixed": ground,
@@ -653,7 +668,10 @@ def _pose_of(raw: dict[str, Any], theta: float) -> dict[str, np.ndarray] | None:
         mech = _parse(raw).mechanism
     except DocumentError:
         return None
-    motion = solve(mech, np.array([theta]), order=0)
+    try:
+        motion = solve(mech, np.array([theta]), order=0)
+    except NoConstructionPlan:
+        return None
     if not bool(np.asarray(motion.valid).all()):
         return None
     return {k: np.asarray(v[0], dtype=float) for k, v in motion.positions.items()}
@@ -679,20 +697,28 @@ def drag(document: Any, joint: str, to: Any, at: float) -> dict[str, Any]:
     >>> [round(float(x), 9) for x in _pose_of(out["document"], math.radians(out["at"]))["P"]]
     [1.0, 3.0]
     """
-    doc = _parse(document)
+    doc = _parse(document, client=True)
     raw = document_to_dict(doc)
-    sphere = doc.mechanism.space == "sphere"
+    sphere = _space(doc) == "sphere"
     target = np.asarray(to, dtype=float)
     if target.shape != ((3,) if sphere else (2,)) or not np.isfinite(target).all():
         raise DragError(
             f"to: must be {'3 finite numbers (a direction)' if sphere else '2 finite numbers'}, "
             f"got {to!r}"
         )
+    biggest = float(np.abs(target).max())
     if sphere:
-        n = float(np.linalg.norm(target))
-        if n < 1e-12:
+        if not biggest > 0:
             raise DragError("to: a direction must not be the zero vector")
-        target = target / n
+        # Scaled by its largest component first, so that its norm neither overflows (1e200²)
+        # nor underflows.
+        target = target / biggest
+        target = target / np.linalg.norm(target)
+    elif biggest > WORKING_RANGE.max_size:
+        raise DragError(
+            f"to: a coordinate over {WORKING_RANGE.max_size:g} in size (outside linkwright's "
+            f"working range), got {to!r}"
+        )
     if not math.isfinite(at):
         raise DragError(f"at: must be a finite angle in degrees, got {at!r}")
     theta = math.radians(at)

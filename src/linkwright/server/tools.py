@@ -32,15 +32,17 @@ import os
 import re
 import tempfile
 import threading
+import unicodedata
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 from fastapi import APIRouter, FastAPI, Request
+from fastapi import Path as PathParam
 from fastapi.responses import Response
 from numpy.typing import NDArray
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema
 
 from linkwright.atlas import AtlasError, build, open_atlas, query
 from linkwright.atlas.atlas import Atlas
@@ -55,8 +57,12 @@ from linkwright.io import (
     parse_document,
     save_document,
 )
+from linkwright.io.documents import WORKING_RANGE
 from linkwright.mechanisms import DoubleSlider, GearedFiveBar, Mechanism, circuit, circuits
 from linkwright.mechanisms import solve as solve_motion
+from linkwright.mechanisms.sixbar import NoConstructionPlan
+from linkwright.server import limits
+from linkwright.server.schema import DocumentBody, document_examples, examples
 from linkwright.synthesis.ellipse import (
     EllipseError,
     Trammel,
@@ -71,6 +77,7 @@ __all__ = [
     "EXPORTS",
     "MAX_POINTS",
     "MAX_STUDY_STEPS",
+    "REFINE_POINTS",
     "MatchError",
     "StudyError",
     "ToolsError",
@@ -82,15 +89,20 @@ Array = NDArray[np.float64]
 
 router = APIRouter()
 
-MAX_POINTS = 20_000
-"""Most points a drawn curve may have."""
-MAX_STUDY_STEPS = 50
-"""Most steps one pivot study takes."""
+MAX_POINTS = limits.POINTS.value
+"""Most points a drawn curve may have (:data:`linkwright.server.limits.POINTS`)."""
+MAX_STUDY_STEPS = limits.STUDY_STEPS.value
+"""Most steps one pivot study takes (:data:`linkwright.server.limits.STUDY_STEPS`)."""
 ATLAS_COUNT = 20_000
 """Entries of the four-bar atlas the workbench builds on first use: it builds in seconds and
 matches drawn curves well once refined (``LINKWRIGHT_WORKBENCH_ATLAS_COUNT`` or
 ``app.state.atlas_count`` change it)."""
 ATLAS_COUNT_ENV = "LINKWRIGHT_WORKBENCH_ATLAS_COUNT"
+REFINE_POINTS = 500
+"""Most drawn points a refined match fits (evenly spaced among them). The refinement solves for
+one input angle per point, so its time grows faster than the count: 1,000 points of an ellipse
+took 6 s, 3,000 took 26 s and 20,000 did not finish in 14 minutes; the page draws a few hundred.
+"""
 CURVE_SAMPLES = 256
 """Samples of each candidate's curve sent back for drawing."""
 FAMILY_TOLERANCE = 1e-9
@@ -131,7 +143,31 @@ class MatchError(ToolsError):
 
 
 def _document(mapping: Any) -> Document:
+    limits.check_document(mapping)
     return parse_document(mapping, source="document")
+
+
+_COORDINATE = {
+    "type": "number",
+    "minimum": -WORKING_RANGE.max_size,
+    "maximum": WORKING_RANGE.max_size,
+}
+
+# Drawn points as the schema describes them; _points checks them with messages naming the row.
+_POINTS_SCHEMA = WithJsonSchema(
+    {
+        "type": "array",
+        "items": {
+            "type": "array",
+            "items": _COORDINATE,
+            "minItems": 2,
+            "maxItems": 2,
+        },
+        "maxItems": limits.POINTS.value,
+        "description": "The drawn curve: [x, y] rows.",
+    }
+)
+Points = Annotated[list[list[float]], _POINTS_SCHEMA]
 
 
 def _num(x: Any) -> float | None:
@@ -153,6 +189,13 @@ def _points(raw: Sequence[Sequence[float]], least: int, field: str = "points") -
     bad = ~np.all(np.isfinite(p), axis=1)
     if bad.any():
         raise ToolsError(f"{field}: row {int(np.flatnonzero(bad)[0])} is not finite")
+    # A document's working range: beyond it squared distances overflow (1e200² is inf).
+    huge = np.any(np.abs(p) > WORKING_RANGE.max_size, axis=1)
+    if huge.any():
+        raise ToolsError(
+            f"{field}: row {int(np.flatnonzero(huge)[0])} has a coordinate over "
+            f"{WORKING_RANGE.max_size:g} in size (outside linkwright's working range)"
+        )
     return p
 
 
@@ -188,18 +231,58 @@ def _traced_curves(mechanism: Mechanism, samples: int) -> tuple[bool, bool, dict
 # --------------------------------------------------------------------------------------------
 
 
+_DIRECTION_SCHEMA = WithJsonSchema(
+    {
+        "anyOf": [
+            {"enum": ["left", "right", "up", "down"]},
+            {"type": "number", "description": "degrees from +x"},
+            {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+        ],
+        "default": "left",
+    }
+)
+
+
+_DOC = document_examples()[0]
+
+
+def _ring(n: int, a: float = 3.0, b: float = 1.2) -> list[list[float]]:
+    """An example drawn curve: n points around an ellipse."""
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return [
+        [round(float(x), 6), round(float(y), 6)]
+        for x, y in zip(a * np.cos(t), b * np.sin(t), strict=True)
+    ]
+
+
 class StudyRequest(BaseModel):
-    document: dict[str, Any]
-    pivot: str = Field(min_length=1, max_length=64)
-    direction: list[float] | float | str = "left"
-    step: float = 0.5
-    count: int = 3
-    samples: int = Field(180, ge=8, le=4096)
+    model_config = ConfigDict(
+        json_schema_extra=examples(
+            {"document": _DOC, "pivot": "B0", "direction": "right", "step": 0.5, "count": 2,
+             "samples": 48}
+        )
+    )  # fmt: skip
+
+    document: DocumentBody
+    pivot: str = Field(min_length=1, max_length=limits.TEXT.value)
+    direction: Annotated[list[float] | float | str, _DIRECTION_SCHEMA] = "left"
+    step: float = Field(0.5, json_schema_extra={"exclusiveMinimum": 0})
+    # Checked in study(), whose message gives the whole range; the schema says it too.
+    count: int = Field(
+        3,
+        json_schema_extra={
+            "minimum": limits.STUDY_STEPS.least,
+            "maximum": limits.STUDY_STEPS.value,
+        },
+    )
+    samples: int = Field(180, ge=limits.SAMPLES.least, le=limits.SAMPLES.value)
 
 
 def _direction(value: list[float] | float | str) -> Array:
     """A unit vector from [dx, dy], an angle in degrees from +x, or left/right/up/down."""
     if isinstance(value, str):
+        if len(value) > limits.TEXT.value:
+            raise limits.over(limits.TEXT, "direction", len(value))
         if value.lower() not in _DIRECTIONS:
             raise StudyError(
                 f"direction: {value!r} is not one of {', '.join(_DIRECTIONS)}, [dx, dy] or an "
@@ -315,7 +398,8 @@ def study(body: StudyRequest) -> dict[str, Any]:
     """
     doc = _document(body.document)
     mech = doc.mechanism
-    if mech.space != "plane":
+    # Read from the document: a mechanism without a construction plan cannot tell its space.
+    if doc.family.startswith("spherical-") or doc.raw["mechanism"].get("space") == "sphere":
         raise StudyError(
             "pivot: the pivot study moves a pivot in the plane; this linkage is spherical"
         )
@@ -399,8 +483,12 @@ def study(body: StudyRequest) -> dict[str, Any]:
 
 
 class MatchRequest(BaseModel):
-    points: list[list[float]]
-    top: int = Field(5, ge=1, le=20)
+    model_config = ConfigDict(
+        json_schema_extra=examples({"points": _ring(24), "top": 3, "refine": False})
+    )
+
+    points: Points
+    top: int = Field(5, ge=limits.MATCH_TOP.least, le=limits.MATCH_TOP.value)
     refine: bool = True
 
 
@@ -535,10 +623,15 @@ def match_prepare(request: Request) -> dict[str, Any]:
 @router.post("/match")
 def match(body: MatchRequest, request: Request) -> dict[str, Any]:
     """The atlas four-bars whose coupler curves best match the drawn closed curve, best first,
-    each placed where the curve was drawn."""
+    each placed where the curve was drawn. A refined match fits at most
+    :data:`REFINE_POINTS` of the points, evenly spaced along the drawing (``fitted`` says how
+    many)."""
     points = _points(body.points, 8)
+    fitted = points
+    if body.refine and len(points) > REFINE_POINTS:
+        fitted = points[np.linspace(0, len(points) - 1, REFINE_POINTS).round().astype(int)]
     atlas = _load_atlas(request.app)
-    matches = query(atlas, points, top=body.top, refine=body.refine, budget=2.0)
+    matches = query(atlas, fitted, top=body.top, refine=body.refine, budget=2.0)
     centred = points - points.mean(axis=0)
     size = float(np.sqrt(np.mean(np.sum(centred**2, axis=1))))
     candidates = []
@@ -558,7 +651,12 @@ def match(body: MatchRequest, request: Request) -> dict[str, Any]:
                 "curve": curve + curve[:1],
             }
         )
-    return {"atlas": {"count": atlas.count}, "size": size, "candidates": candidates}
+    return {
+        "atlas": {"count": atlas.count},
+        "size": size,
+        "fitted": len(fitted),
+        "candidates": candidates,
+    }
 
 
 # --------------------------------------------------------------------------------------------
@@ -566,19 +664,42 @@ def match(body: MatchRequest, request: Request) -> dict[str, Any]:
 # --------------------------------------------------------------------------------------------
 
 
+Circle = Annotated[str, Field(json_schema_extra={"enum": ["small", "large"]})]
+
+
 class EllipseRequest(BaseModel):
-    points: list[list[float]]
-    count: int = Field(12, ge=0, le=200)
-    circle: str = "small"
+    model_config = ConfigDict(json_schema_extra=examples({"points": _ring(24), "count": 4}))
+
+    points: Points
+    count: int = Field(12, ge=limits.ELLIPSE_FAMILY.least, le=limits.ELLIPSE_FAMILY.value)
+    circle: Circle = "small"
+
+
+_PAIR = {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2}
+_ELLIPSE_SCHEMA = WithJsonSchema(
+    {
+        "type": "object",
+        "properties": {"center": _PAIR, "axes": _PAIR, "angle": {"type": "number"}},
+        "required": ["center", "axes"],
+        "description": "An ellipse as /ellipse answers it: centre, semi-axes, angle (degrees).",
+    }
+)
 
 
 class TrammelRequest(BaseModel):
-    ellipse: dict[str, Any]
+    model_config = ConfigDict(
+        json_schema_extra=examples(
+            {"ellipse": {"center": [0.0, 0.0], "axes": [3.0, 1.2], "angle": 20.0}, "a": 30.0,
+             "b": 120.0}
+        )
+    )  # fmt: skip
+
+    ellipse: Annotated[dict[str, Any], _ELLIPSE_SCHEMA]
     a: float | None = None
     b: float | None = None
     s1: float | None = None
     s2: float | None = None
-    circle: str = "small"
+    circle: Circle = "small"
 
 
 def _ellipse_curve(t: Trammel, samples: int = 181) -> list[list[float]]:
@@ -614,6 +735,11 @@ def _trammel_of(value: dict[str, Any]) -> Trammel:
         raise EllipseError("ellipse: center, axes and angle must be finite")
     if not (a > 0 and b > 0):
         raise EllipseError(f"ellipse.axes: both semi-axes must be positive, got [{a}, {b}]")
+    if max(abs(cx), abs(cy), a, b) > WORKING_RANGE.max_size:
+        raise EllipseError(
+            f"ellipse: centre and axes must be at most {WORKING_RANGE.max_size:g} in size "
+            "(outside linkwright's working range)"
+        )
     if a < b:  # the major axis is the other one
         a, b, angle = b, a, angle + 90.0
     beta = math.radians((angle + 90.0) % 180.0 - 90.0)
@@ -623,7 +749,8 @@ def _trammel_of(value: dict[str, Any]) -> Trammel:
 
 def _check_circle(circle: str) -> str:
     if circle not in ("small", "large"):
-        raise EllipseError(f"circle: must be 'small' or 'large', got {circle!r}")
+        shown = circle if len(circle) <= limits.TEXT.value else circle[: limits.TEXT.value] + "…"
+        raise EllipseError(f"circle: must be 'small' or 'large', got {shown!r}")
     return circle
 
 
@@ -707,9 +834,13 @@ def ellipse_trammel(body: TrammelRequest) -> dict[str, Any]:
 
 
 class ExportRequest(BaseModel):
-    document: dict[str, Any]
+    model_config = ConfigDict(
+        json_schema_extra=examples({"document": _DOC, "at": 30.0, "samples": 48})
+    )
+
+    document: DocumentBody
     at: float | None = None
-    samples: int = Field(360, ge=8, le=4096)
+    samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value)
 
 
 def _filename(doc: Document, fmt: str) -> str:
@@ -719,42 +850,72 @@ def _filename(doc: Document, fmt: str) -> str:
     return f"{stem or doc.family}.{fmt}"
 
 
+def _plain(title: str | None) -> str | None:
+    """A title as one line of drawable text: control characters and line breaks as spaces."""
+    if title is None:
+        return None
+    return " ".join(
+        "".join(" " if unicodedata.category(c)[0] in "CZ" else c for c in title).split()
+    )
+
+
 def _write(doc: Document, fmt: str, path: Path, at: float | None, samples: int) -> None:
     mech = doc.mechanism
+    title = _plain(doc.title)
     if fmt == "png":
         from linkwright.plot import plot_mechanism, save_figure
 
-        save_figure(plot_mechanism(mech, at=at, samples=samples, title=doc.title), path,
+        save_figure(plot_mechanism(mech, at=at, samples=samples, title=title), path,
                     dpi=PNG_DPI)  # fmt: skip
     elif fmt == "gif":
         from linkwright.plot import animate
 
-        animate(mech, path, frames=GIF_FRAMES, fps=GIF_FPS, dpi=GIF_DPI, title=doc.title)
+        animate(mech, path, frames=GIF_FRAMES, fps=GIF_FPS, dpi=GIF_DPI, title=title)
     elif fmt == "svg":
-        export_svg(mech, path, at=at, samples=samples, units=doc.units, title=doc.title)
+        export_svg(mech, path, at=at, samples=samples, units=doc.units, title=title)
     elif fmt == "dxf":
-        export_dxf(mech, path, at=at, samples=samples, units=doc.units, title=doc.title)
+        export_dxf(mech, path, at=at, samples=samples, units=doc.units, title=title)
     elif fmt == "csv":
         export_csv(mech, path, samples=samples)
     else:  # toml, json
         save_document(doc, path)
 
 
-@router.post("/export/{fmt}")
-def export_file(fmt: str, body: ExportRequest) -> Response:
+@router.post(
+    "/export/{fmt}",
+    response_class=Response,
+    responses={
+        200: {
+            "content": {media: {} for media in dict.fromkeys(EXPORTS.values())},
+            "description": "The file, as an attachment.",
+        }
+    },
+)
+def export_file(
+    fmt: Annotated[str, PathParam(json_schema_extra={"enum": list(EXPORTS)})],
+    body: ExportRequest,
+    request: Request,
+) -> Response:
     """The document as a file (attachment) at input ``at`` (degrees; default: the circuit's
-    first sample)."""
+    first sample). The file is drawn in a scratch folder inside the data directory (no name
+    the client sends makes a path) and removed once read."""
     fmt = fmt.lower()
     if fmt not in EXPORTS:
-        raise ToolsError(f"fmt: unknown export format {fmt!r} (one of {', '.join(EXPORTS)})")
+        shown = fmt if len(fmt) <= 16 else fmt[:16] + "…"
+        raise ToolsError(f"fmt: unknown export format {shown!r} (one of {', '.join(EXPORTS)})")
     doc = _document(body.document)
     if body.at is not None and not math.isfinite(body.at):
         raise ToolsError(f"at: must be a finite input angle in degrees, got {body.at}")
     at = None if body.at is None else math.radians(body.at)
     name = _filename(doc, fmt)
-    with tempfile.TemporaryDirectory(prefix="linkwright-export-") as folder:
+    scratch = Path(request.app.state.data_dir) / "scratch"
+    scratch.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="export-", dir=scratch) as folder:
         path = Path(folder) / f"export.{fmt}"
-        _write(doc, fmt, path, at, body.samples)
+        try:
+            _write(doc, fmt, path, at, body.samples)
+        except NoConstructionPlan as exc:
+            raise ToolsError(f"document: cannot be drawn: {exc}") from None
         payload = path.read_bytes()
     return Response(
         payload,

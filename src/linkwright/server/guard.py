@@ -1,0 +1,209 @@
+"""What the workbench checks before a request reaches a route, and the names it gives files.
+
+:class:`Guard` is the application's outermost ASGI middleware. It answers, itself and in the
+API's ``{"error": "..."}`` form:
+
+- 413 for a body over :data:`~linkwright.server.limits.BODY_BYTES`: at once where the
+  ``Content-Length`` says so, else counted as a chunked body (or a multipart upload) arrives;
+- 422 for a JSON body nested deeper than :data:`~linkwright.server.limits.JSON_DEPTH`,
+  measured on the bytes before any parser recurses through them;
+- 403 for a state-changing request sent by another site's page (its ``Origin`` is not the
+  address the workbench is reached at): the workbench has no login, so a page elsewhere must
+  not be able to write to its library (cross-site request forgery);
+- 421 for a ``Host`` outside ``allowed_hosts`` where the app was given some (a loopback
+  server gives its loopback names: another name resolving to 127.0.0.1 is DNS rebinding).
+
+:func:`attachment` builds a ``Content-Disposition`` value from any name (a title, a library
+entry) without letting a path or a header break through, and :func:`shown_filename` the one
+line an uploaded file's name is shown as.
+"""
+
+from __future__ import annotations
+
+import re
+import unicodedata
+from collections.abc import Iterable
+from typing import Any
+from urllib.parse import quote, urlsplit
+
+from starlette.datastructures import Headers
+from starlette.responses import JSONResponse
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from linkwright.server.limits import BODY_BYTES, JSON_DEPTH, json_depth
+
+__all__ = ["LOOPBACK_HOSTS", "Guard", "attachment", "shown_filename"]
+
+LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
+"""The names a browser on this machine reaches a loopback-bound workbench by."""
+
+_SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+
+
+def _host_name(netloc: str) -> str:
+    """The host of ``host[:port]`` (brackets of an IPv6 literal dropped), lower-cased."""
+    try:
+        return (urlsplit(f"//{netloc}").hostname or "").lower()
+    except ValueError:
+        return ""
+
+
+class Guard:
+    """ASGI middleware: body size and nesting, cross-site writes, and (optionally) the Host
+    header, checked before the application sees a request (module docstring)."""
+
+    def __init__(self, app: ASGIApp, allowed_hosts: Iterable[str] | None = None) -> None:
+        self.app = app
+        self.allowed = None if allowed_hosts is None else {h.lower() for h in allowed_hosts}
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        headers = Headers(scope=scope)
+        refusal = self._refuse_headers(scope, headers)
+        if refusal is not None:
+            await refusal(scope, receive, send)
+            return
+        body, last, refusal = await self._read(receive)
+        if refusal is not None:
+            await refusal(scope, receive, send)
+            return
+        if body and self._json(headers):
+            brackets = body.count(b"[") + body.count(b"{")
+            if brackets > JSON_DEPTH.value and (depth := json_depth(body)) > JSON_DEPTH.value:
+                message = f"body: JSON nested {depth:,} levels, at most {JSON_DEPTH.value} allowed"
+                await _error(422, message)(scope, receive, send)
+                return
+        await self.app(scope, _replay(body, last, receive), send)
+
+    def _refuse_headers(self, scope: Scope, headers: Headers) -> JSONResponse | None:
+        host = headers.get("host", "")
+        if self.allowed is not None and _host_name(host) not in self.allowed:
+            return _error(
+                421,
+                f"host: this workbench answers to {', '.join(sorted(self.allowed))} only, "
+                f"not {_short(host)!r}",
+            )
+        origin = headers.get("origin")
+        if scope["method"] not in _SAFE_METHODS and origin is not None:
+            parts = urlsplit(origin) if origin != "null" else None
+            if parts is None or parts.netloc.lower() != host.lower():
+                return _error(
+                    403,
+                    f"origin: a page at {_short(origin)!r} may not change this workbench "
+                    "(cross-site requests are refused)",
+                )
+        length = headers.get("content-length")
+        if length is not None:
+            if not (length.isascii() and length.isdigit()):
+                return _error(400, f"content-length: not a number of bytes: {_short(length)!r}")
+            if int(length) > BODY_BYTES.value:
+                return _error(
+                    413,
+                    f"request body: {int(length):,} bytes, over the {BODY_BYTES.value:,} allowed",
+                )
+        return None
+
+    @staticmethod
+    async def _read(receive: Receive) -> tuple[bytes, Message | None, JSONResponse | None]:
+        """The whole body (counted as it arrives), the message that ended it if it was not a
+        body part (a disconnect), and the refusal if it was too large."""
+        parts: list[bytes] = []
+        size = 0
+        while True:
+            message = await receive()
+            if message["type"] != "http.request":
+                return b"".join(parts), message, None
+            chunk = message.get("body", b"")
+            size += len(chunk)
+            if size > BODY_BYTES.value:
+                return (
+                    b"",
+                    None,
+                    _error(
+                        413,
+                        f"request body: over the {BODY_BYTES.value:,} bytes allowed "
+                        f"({size:,} received so far)",
+                    ),
+                )
+            parts.append(chunk)
+            if not message.get("more_body", False):
+                return b"".join(parts), None, None
+
+    @staticmethod
+    def _json(headers: Headers) -> bool:
+        # A body without a Content-Type is JSON to some FastAPI versions, so it is measured too.
+        kind = headers.get("content-type", "").split(";")[0].strip().lower()
+        return not kind or kind == "application/json" or kind.endswith("+json")
+
+
+def _replay(body: bytes, last: Message | None, receive: Receive) -> Receive:
+    """A ``receive`` that hands the application the body already read, then what follows."""
+    sent = False
+
+    async def replay() -> Message:
+        nonlocal sent
+        if not sent:
+            sent = True
+            if last is not None and not body:
+                return last
+            return {"type": "http.request", "body": body, "more_body": False}
+        if last is not None:
+            return last
+        return await receive()
+
+    return replay
+
+
+def _error(status: int, message: str) -> JSONResponse:
+    return JSONResponse({"error": " ".join(message.splitlines())}, status_code=status)
+
+
+def _short(text: str, most: int = 80) -> str:
+    return text if len(text) <= most else text[: most - 1] + "…"
+
+
+# --------------------------------------------------------------------------------------------
+# File names
+# --------------------------------------------------------------------------------------------
+
+_UNSAFE_ASCII = re.compile(r"[^A-Za-z0-9._ -]+")
+_REFUSED_CATEGORIES = ("Cc", "Cf", "Cs", "Zl", "Zp")
+
+
+def attachment(name: str, suffix: str, fallback: str = "mechanism") -> str:
+    """A ``Content-Disposition`` value naming a file ``name.suffix`` (RFC 6266): an ASCII
+    ``filename`` of letters, digits, ``.``, ``_``, ``-`` and spaces (no slash, no quote, no
+    leading dot), and the UTF-8 name in ``filename*``, percent-encoded, with path separators
+    and control characters made ``_``. Each part is at most 100 characters before the suffix.
+
+    >>> print(attachment("../../etc/passwd", "toml"))
+    attachment; filename="etc_passwd.toml"; filename*=UTF-8''_.._etc_passwd.toml
+    >>> print(attachment("Kurbel ä", "svg"))
+    attachment; filename="Kurbel.svg"; filename*=UTF-8''Kurbel%20%C3%A4.svg
+    """
+    ascii_name = _UNSAFE_ASCII.sub("_", name).strip(" ._")[:100] or fallback
+    utf8_name = "".join(
+        "_" if ch in "/\\" or unicodedata.category(ch) in _REFUSED_CATEGORIES else ch for ch in name
+    )
+    utf8_name = utf8_name.strip(" .")[:100] or fallback
+    return (
+        f'attachment; filename="{ascii_name}.{suffix}"; '
+        f"filename*=UTF-8''{quote(f'{utf8_name}.{suffix}', safe='')}"
+    )
+
+
+def shown_filename(filename: Any) -> str:
+    """An uploaded file's name as one short line for messages and default names: the last
+    path component only (after ``/`` or ``\\``), controls and line breaks dropped, at most 100
+    characters.
+
+    >>> shown_filename("../../etc/passwd"), shown_filename("C:\\\\x\\\\a\\nb.toml")
+    ('passwd', 'ab.toml')
+    """
+    text = str(filename or "")
+    text = re.split(r"[/\\]", text)[-1]
+    text = "".join(ch for ch in text if unicodedata.category(ch) not in _REFUSED_CATEGORIES)
+    text = text.strip()
+    return _short(text, 100) or "file"

@@ -1,0 +1,285 @@
+"""Every bound the workbench puts on a request, in one table, each with the reason for its value.
+
+The workbench computes whatever a request asks for (a scene, a study, a match), so each
+quantity a client chooses is bounded: the body's size and nesting, sample counts, list sizes,
+the match's top-K, string lengths. :data:`LIMITS` holds them all; the app serves the table
+read-only at ``GET /api/limits``. A request over a limit is answered 413 (the body's size) or
+422 (anything else) with ``{"error": "..."}`` naming the field and the limit.
+
+Examples
+--------
+>>> LIMITS["samples"].value, LIMITS["samples"].least
+(4096, 8)
+>>> check_document({"format": "linkwright/1", "title": "x" * 1001, "mechanism": {}})
+Traceback (most recent call last):
+...
+linkwright.server.limits.LimitError: document: title: 1,001 characters, at most 1,000 allowed
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "BODY_BYTES",
+    "DOCUMENT_LIST",
+    "ELLIPSE_FAMILY",
+    "JSON_DEPTH",
+    "LIMITS",
+    "MATCH_TOP",
+    "NAME",
+    "POINTS",
+    "SAMPLES",
+    "STUDY_STEPS",
+    "TEXT",
+    "TITLE",
+    "Limit",
+    "LimitError",
+    "as_json",
+    "check_document",
+    "json_depth",
+    "over",
+]
+
+
+class LimitError(ValueError):
+    """A request over one of the workbench's limits (the message names the field and the
+    limit; the app answers 422)."""
+
+
+@dataclass(frozen=True)
+class Limit:
+    """One bound: its largest ``value`` (and smallest, ``least``, where there is one) in
+    ``unit``, the request fields it ``applies`` to, and ``why`` it has that value."""
+
+    name: str
+    value: int
+    unit: str
+    applies: str
+    why: str
+    least: int | None = None
+
+
+BODY_BYTES = Limit(
+    "body_bytes",
+    2_000_000,
+    "bytes",
+    "every request body: JSON, or a multipart upload; with or without Content-Length "
+    "(a chunked body is counted as it arrives)",
+    "A drawn curve at its 20,000-point limit is about 0.8 MB of JSON and a document a few kB; "
+    "the body is held whole to be parsed, so its size bounds the memory one request can pin.",
+)
+JSON_DEPTH = Limit(
+    "json_depth",
+    32,
+    "levels",
+    "the nesting of a JSON request body, and of a document imported into the library",
+    "The deepest request a client needs is 6 levels (a point of a composed linkage's joint in "
+    "a document in the body); Python's JSON and TOML parsers recurse once per level, so a bound "
+    "far below the interpreter's recursion limit keeps a hostile body from exhausting the stack.",
+)
+SAMPLES = Limit(
+    "samples",
+    4096,
+    "samples",
+    "scene.samples, study.samples, export.samples (input angles traced per circuit)",
+    "The page draws 360; 4096 is a step under 0.1°. A scene's time and size grow linearly: "
+    "4096 samples of the spherical six-bar take 0.4 s and 11 MB of JSON.",
+    least=8,
+)
+STUDY_STEPS = Limit(
+    "study_steps",
+    50,
+    "steps",
+    "study.count (each step is a whole traced linkage)",
+    "The page offers a handful; 51 linkages of 4096 samples each take about 2 s and 8 MB.",
+    least=0,
+)
+POINTS = Limit(
+    "points",
+    20_000,
+    "points",
+    "match.points, ellipse.points (a drawn curve)",
+    "The page samples the pointer (a few hundred points) and a CSV of 20,000 rows is a finely "
+    "traced curve. Fitting and matching are linear in it (20,000 points: 0.3 s); a refined "
+    "match fits 500 of them, evenly spaced (its cost grows faster than the count).",
+)
+MATCH_TOP = Limit(
+    "match_top",
+    20,
+    "candidates",
+    "match.top (the top-K of the atlas match)",
+    "Each candidate is refined and traced again; twenty is more than a person compares.",
+    least=1,
+)
+ELLIPSE_FAMILY = Limit(
+    "ellipse_family",
+    200,
+    "double sliders",
+    "ellipse.count (members of paper 004's family listed)",
+    "The page lists 12; each member is checked against the ellipse at 360 samples.",
+    least=0,
+)
+DOCUMENT_LIST = Limit(
+    "document_list",
+    32,
+    "entries",
+    "any list in a document (a composed linkage's joints, its traced joints)",
+    "The largest bundled linkage has 8 joints. A scene's and a drag's time grow faster than "
+    "the square of the joint count: a chain of 32 dyads takes 0.8 s to draw and 3 s to drag, "
+    "one of 64 takes 3.5 s and 22 s.",
+)
+TITLE = Limit(
+    "title",
+    1_000,
+    "characters",
+    "a document's title",
+    "A title is a line on the page and the source of a file or library name; 1,000 characters "
+    "is a paragraph.",
+)
+TEXT = Limit(
+    "text",
+    64,
+    "characters",
+    "every other string of a document (family, units, joint names and references), drag.joint, "
+    "study.pivot, study.direction, ellipse.circle",
+    "Names a joint or a choice: any readable name fits, and a document's joints can all be "
+    "dragged (drag.joint has the same bound).",
+)
+NAME = Limit(
+    "name",
+    200,
+    "characters",
+    "library entry names (after stripping), in save, rename and import",
+    "A name is one line in the library list and a file name on export.",
+)
+
+LIMITS: dict[str, Limit] = {
+    limit.name: limit
+    for limit in (
+        BODY_BYTES,
+        JSON_DEPTH,
+        SAMPLES,
+        STUDY_STEPS,
+        POINTS,
+        MATCH_TOP,
+        ELLIPSE_FAMILY,
+        DOCUMENT_LIST,
+        TITLE,
+        TEXT,
+        NAME,
+    )
+}
+"""Every limit by name (what ``GET /api/limits`` serves)."""
+
+
+def as_json() -> dict[str, dict[str, Any]]:
+    """The table as ``GET /api/limits`` serves it: name → {value, least, unit, applies, why}.
+
+    >>> sorted(as_json()["match_top"])
+    ['applies', 'least', 'unit', 'value', 'why']
+    """
+    return {
+        name: {k: v for k, v in asdict(limit).items() if k != "name"}
+        for name, limit in LIMITS.items()
+    }
+
+
+def over(limit: Limit, field: str, got: int) -> LimitError:
+    """The error for ``field`` at ``got`` units, over ``limit``.
+
+    >>> str(over(NAME, "name", 201))
+    'name: 201 characters, at most 200 allowed'
+    """
+    return LimitError(f"{field}: {got:,} {limit.unit}, at most {limit.value:,} allowed")
+
+
+# --------------------------------------------------------------------------------------------
+# A document's strings, lists and nesting
+# --------------------------------------------------------------------------------------------
+
+
+def _path(parent: str, key: str | int) -> str:
+    if isinstance(key, int):
+        return f"{parent}[{key}]"
+    return f"{parent}.{key}" if parent else key
+
+
+def check_document(document: Any, field: str = "document") -> None:
+    """Refuse a document over the limits before it is parsed: a list of more than
+    :data:`DOCUMENT_LIST` entries, a title over :data:`TITLE` characters, any other string
+    (keys included) over :data:`TEXT`, nesting over :data:`JSON_DEPTH`. Everything else about
+    it is :func:`~linkwright.io.parse_document`'s to judge. Paths are written as the document
+    parser writes them (``mechanism.joints[3].name``), after ``field``.
+
+    Raises
+    ------
+    LimitError
+        Naming the first value over a limit.
+
+    Examples
+    --------
+    >>> joints = [{"name": f"J{i}", "type": "fixed", "at": [0, i]} for i in range(33)]
+    >>> check_document({"mechanism": {"family": "linkage", "joints": joints}})
+    Traceback (most recent call last):
+    ...
+    linkwright.server.limits.LimitError: document: mechanism.joints: 33 entries, at most 32 allowed
+    """
+    # Iterative, so that the walk itself cannot overflow the stack on a deep value.
+    stack: list[tuple[Any, str, int]] = [(document, "", 1)]
+    while stack:
+        value, path, depth = stack.pop()
+        if isinstance(value, dict | list):
+            if depth > JSON_DEPTH.value:
+                raise LimitError(
+                    f"{field}: nested {depth} levels, at most {JSON_DEPTH.value} allowed"
+                )
+            if isinstance(value, list):
+                if len(value) > DOCUMENT_LIST.value:
+                    raise over(DOCUMENT_LIST, f"{field}: {path or 'document'}", len(value))
+                # Reversed onto the stack, so that the walk (and the first error) goes in
+                # document order.
+                stack.extend(
+                    (v, _path(path, i), depth + 1) for i, v in reversed(list(enumerate(value)))
+                )
+            else:
+                for key, v in reversed(value.items()):
+                    if isinstance(key, str) and len(key) > TEXT.value:
+                        raise LimitError(
+                            f"{field}: {path or 'document'}: a key of {len(key):,} characters, "
+                            f"at most {TEXT.value} allowed"
+                        )
+                    stack.append((v, _path(path, str(key)), depth + 1))
+        elif isinstance(value, str):
+            limit = TITLE if path == "title" else TEXT
+            if len(value) > limit.value:
+                raise over(limit, f"{field}: {path or 'document'}", len(value))
+
+
+# --------------------------------------------------------------------------------------------
+# A JSON body's nesting, before it is parsed
+# --------------------------------------------------------------------------------------------
+
+_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"', re.DOTALL)
+_NOT_BRACKETS = bytes(b for b in range(256) if b not in b"[]{}")
+
+
+def json_depth(body: bytes) -> int:
+    """How deeply a JSON text nests its arrays and objects (0 for a scalar), read from the
+    bytes without parsing them (the parser is what a deep body would overflow); brackets inside
+    strings do not count. For a body that is not JSON the count is still a bound on what a
+    parser would recurse through.
+
+    >>> json_depth(b'{"a": [1, {"b": "[[["}]}'), json_depth(b"[" * 40), json_depth(b"7")
+    (3, 40, 0)
+    """
+    brackets = _STRING.sub(b"", body).translate(None, _NOT_BRACKETS)
+    if not brackets:
+        return 0
+    codes = np.frombuffer(brackets, dtype=np.uint8)
+    step = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1)
+    return max(0, int(np.cumsum(step).max()))
