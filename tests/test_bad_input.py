@@ -481,7 +481,7 @@ COMMANDS = [
 
 
 @settings(
-    max_examples=1200,
+    max_examples=800,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
@@ -540,7 +540,7 @@ ARGUMENT_SHAPES = [
 
 
 @settings(
-    max_examples=400,
+    max_examples=300,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
@@ -558,7 +558,7 @@ def test_fuzz_command_line_options(tmp_path, monkeypatch, capsys, shape, data):
 
 
 @settings(
-    max_examples=300,
+    max_examples=200,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )

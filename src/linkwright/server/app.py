@@ -71,7 +71,7 @@ class SceneRequest(BaseModel):
     )
 
     document: DocumentBody
-    samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value)
+    samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value, strict=True)
     at: float | None = None
     diagrams: bool = True
 

@@ -266,16 +266,17 @@ class StudyRequest(BaseModel):
     document: DocumentBody
     pivot: str = Field(min_length=1, max_length=limits.TEXT.value)
     direction: Annotated[list[float] | float | str, _DIRECTION_SCHEMA] = "left"
-    step: float = Field(0.5, json_schema_extra={"exclusiveMinimum": 0})
+    step: float = Field(0.5, strict=True, json_schema_extra={"exclusiveMinimum": 0})
     # Checked in study(), whose message gives the whole range; the schema says it too.
     count: int = Field(
         3,
+        strict=True,
         json_schema_extra={
             "minimum": limits.STUDY_STEPS.least,
             "maximum": limits.STUDY_STEPS.value,
         },
     )
-    samples: int = Field(180, ge=limits.SAMPLES.least, le=limits.SAMPLES.value)
+    samples: int = Field(180, ge=limits.SAMPLES.least, le=limits.SAMPLES.value, strict=True)
 
 
 def _direction(value: list[float] | float | str) -> Array:
@@ -488,7 +489,7 @@ class MatchRequest(BaseModel):
     )
 
     points: Points
-    top: int = Field(5, ge=limits.MATCH_TOP.least, le=limits.MATCH_TOP.value)
+    top: int = Field(5, ge=limits.MATCH_TOP.least, le=limits.MATCH_TOP.value, strict=True)
     refine: bool = True
 
 
@@ -671,7 +672,9 @@ class EllipseRequest(BaseModel):
     model_config = ConfigDict(json_schema_extra=examples({"points": _ring(24), "count": 4}))
 
     points: Points
-    count: int = Field(12, ge=limits.ELLIPSE_FAMILY.least, le=limits.ELLIPSE_FAMILY.value)
+    count: int = Field(
+        12, ge=limits.ELLIPSE_FAMILY.least, le=limits.ELLIPSE_FAMILY.value, strict=True
+    )
     circle: Circle = "small"
 
 
@@ -840,7 +843,7 @@ class ExportRequest(BaseModel):
 
     document: DocumentBody
     at: float | None = None
-    samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value)
+    samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value, strict=True)
 
 
 def _filename(doc: Document, fmt: str) -> str:
