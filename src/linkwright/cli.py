@@ -100,13 +100,9 @@ def _in_working_range(value: float, where: str, *, angle: bool = False) -> None:
     """The documents' working range, for numbers given on the command line or in point files."""
     from linkwright.io.documents import WORKING_RANGE
 
-    limit = WORKING_RANGE.max_angle if angle else WORKING_RANGE.max_size
-    if abs(value) > limit:
-        unit = " degrees" if angle else ""
-        raise CliError(
-            f"{where} must be at most {limit:g}{unit} in size, got {value:g} "
-            "(outside linkwright's working range)"
-        )
+    check = WORKING_RANGE.angle_problem if angle else WORKING_RANGE.size_problem
+    if problem := check(value):
+        raise CliError(f"{where} {problem}")
 
 
 def parse_inputs(spec: str) -> list[float]:
@@ -558,8 +554,10 @@ def curve(
     """The path of the traced point P over the whole closed circuit."""
     if as_csv and as_json:
         raise CliError("--csv and --json cannot be used together")
-    if spacing not in ("input", "path"):
-        raise CliError(f"--spacing: must be input or path, got {spacing!r}")
+    from linkwright.engine.circuits import SPACINGS
+
+    if spacing not in SPACINGS:
+        raise CliError(f"--spacing: must be {' or '.join(SPACINGS)}, got {spacing!r}")
     doc = _load(file)
     result = curve_document(doc, points, spacing=spacing)
     if as_json:
@@ -640,12 +638,8 @@ def analyze(
     if mu is not None and math.isfinite(mu) and mu > 0:
         from linkwright.io.documents import WORKING_RANGE
 
-        low = WORKING_RANGE.min_ratio
-        if not low <= mu <= 1 / low:
-            raise CliError(
-                f"--mu: must be from {low:g} to {1 / low:g}, got {mu:g} "
-                "(outside linkwright's working range for ratios)"
-            )
+        if problem := WORKING_RANGE.ratio_problem(mu):
+            raise CliError(f"--mu: {problem}")
     try:
         report = run_analysis(doc.mechanism) if mu is None else run_analysis(doc.mechanism, mu=mu)
     except ValueError as exc:

@@ -1020,12 +1020,8 @@ REFINE_GRIDS = (8 * GRID, 64 * GRID)
 
 def _subset(params, points, shape, mask):
     """The parameters of the linkages selected by ``mask`` (a boolean array of batch shape)."""
-    out = {}
-    for key, value in params.items():
-        a = np.asarray(value, dtype=float)
-        tail = a.shape[-1:] if key in points else ()
-        out[key] = np.broadcast_to(a, shape + tail)[mask]
-    return out
+    # Boolean indexing takes the selected linkages in row-major order, as flatnonzero does.
+    return _take(params, points, shape, np.flatnonzero(mask))
 
 
 def _scatter(full, part, mask):

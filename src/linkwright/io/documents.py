@@ -200,6 +200,41 @@ class WorkingRange:
     min_ratio: float = 1e-6
     """Smallest size of a gear ratio (and 1 / the largest)."""
 
+    def size_problem(self, value: float) -> str | None:
+        """What is wrong with ``value`` as a length or coordinate's size, or None.
+
+        >>> WORKING_RANGE.size_problem(-3.5) is None
+        True
+        >>> print(WORKING_RANGE.size_problem(1e300))
+        must be at most 1e+12 in size, got 1e+300 (outside linkwright's working range: use
+        larger units)
+        """
+        if abs(value) <= self.max_size:
+            return None
+        return (
+            f"must be at most {self.max_size:g} in size, got {_show(value)} "
+            "(outside linkwright's working range: use larger units)"
+        )
+
+    def angle_problem(self, value: float) -> str | None:
+        """What is wrong with ``value`` as an angle in degrees, or None."""
+        if abs(value) <= self.max_angle:
+            return None
+        return (
+            f"must be at most {self.max_angle:g} degrees in size, got {_show(value)} "
+            "(outside linkwright's working range: reduce it by whole turns of 360)"
+        )
+
+    def ratio_problem(self, value: float) -> str | None:
+        """What is wrong with a nonzero ``value`` as a ratio (a gear's, a hinge radii's)."""
+        low = self.min_ratio
+        if low <= abs(value) <= 1 / low:
+            return None
+        return (
+            f"must be from {low:g} to {1 / low:g} in size, got {_show(value)} "
+            "(outside linkwright's working range for ratios)"
+        )
+
 
 WORKING_RANGE = WorkingRange()
 
@@ -264,12 +299,8 @@ def _number(value: Any, path: str, what: str) -> float:
 def _sized(value: Any, path: str, what: str) -> float:
     """A number no larger than the working range allows (a length, coordinate or offset)."""
     x = _number(value, path, what)
-    if abs(x) > WORKING_RANGE.max_size:
-        raise DocumentError(
-            path,
-            f"must be at most {WORKING_RANGE.max_size:g} in size, got {_show(value)} "
-            "(outside linkwright's working range: use larger units)",
-        )
+    if problem := WORKING_RANGE.size_problem(x):
+        raise DocumentError(path, problem)
     return x
 
 
@@ -317,12 +348,8 @@ def _parse_length(value: Any, path: str) -> float:
 
 def _parse_angle(value: Any, path: str) -> float:
     x = _number(value, path, "an angle in degrees")
-    if abs(x) > WORKING_RANGE.max_angle:
-        raise DocumentError(
-            path,
-            f"must be at most {WORKING_RANGE.max_angle:g} degrees in size, got {_show(value)} "
-            "(reduce it by whole turns of 360)",
-        )
+    if problem := WORKING_RANGE.angle_problem(x):
+        raise DocumentError(path, problem)
     return x
 
 
@@ -423,13 +450,8 @@ def _parse_ratio(value: Any, path: str) -> float:
         raise DocumentError(
             path, f"must be a nonzero number, got {_show(value)} (a ratio of 0 does not turn)"
         )
-    low = WORKING_RANGE.min_ratio
-    if not low <= abs(x) <= 1 / low:
-        raise DocumentError(
-            path,
-            f"must be from {low:g} to {1 / low:g} in size, got {_show(value)} "
-            "(outside linkwright's working range for gear ratios)",
-        )
+    if problem := WORKING_RANGE.ratio_problem(x):
+        raise DocumentError(path, problem)
     return x
 
 
@@ -759,7 +781,7 @@ def _doubleslider_lines(m: dict[str, Any]) -> None:
             f"(the slider lines would be parallel; keep them {WORKING_RANGE.min_arc:g} "
             "degrees apart at least)",
         )
-    size = max(abs(m["p"]), abs(m["q"]), abs(m["h"]), *map(abs, m["M"]))
+    _, size = _planar_dimensions(m, FAMILY_SPECS["doubleslider"])
     if abs(m["p"] + m["q"]) <= WORKING_RANGE.min_share * size:
         raise DocumentError(
             "mechanism.q", "p + q must not be 0 (the sliders R and Q would coincide)"

@@ -31,7 +31,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import (
     Fixed,
-    InputArcs,
     Motion,
     SphereCrank,
     SphereDyad,
@@ -438,11 +437,6 @@ def _links(mechanism: Mechanism) -> tuple[list[tuple[str, str]], list[tuple[str,
     return pairs, bodies
 
 
-def _circuits(mechanism: Mechanism, samples: int) -> tuple[InputArcs, list[Motion]]:
-    """The admissible input arcs and every circuit (none where nothing assembles)."""
-    return circuits(mechanism, samples, order=0)
-
-
 def default_view(mechanism: Mechanism, *, samples: int = 180) -> Array:
     """The direction :func:`plot_spherical_linkage` looks from unless told otherwise.
 
@@ -495,7 +489,7 @@ def default_view(mechanism: Mechanism, *, samples: int = 180) -> Array:
     (np.float64(35.0), True)
     """
     _require_sphere(mechanism)
-    return _default_view(mechanism, _circuits(mechanism, samples)[1])
+    return _default_view(mechanism, circuits(mechanism, samples, order=0)[1])
 
 
 def _default_view(mechanism: Mechanism, circuits: list[Motion]) -> Array:

@@ -31,6 +31,7 @@ from linkwright import __version__
 from linkwright.io import document_to_dict, list_examples, load_example
 from linkwright.server import library, limits, scene, tools
 from linkwright.server.guard import LOOPBACK_HOSTS, Guard
+from linkwright.server.guard import error_response as _error
 from linkwright.server.schema import DocumentBody, document_examples, examples
 
 __all__ = ["LOOPBACK_HOSTS", "MAX_BODY_BYTES", "create_app"]
@@ -101,12 +102,6 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
 
 def _static_dir() -> Path:
     return Path(str(resources.files("linkwright.server") / "static"))
-
-
-def _error(status: int, message: str, headers: dict[str, str] | None = None) -> JSONResponse:
-    # One line, whatever a message quoted from the request held.
-    line = " ".join(message.splitlines()) or f"HTTP {status}"
-    return JSONResponse({"error": line}, status_code=status, headers=headers)
 
 
 def _shown(value: Any, most: int = 40) -> str:

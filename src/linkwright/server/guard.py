@@ -32,7 +32,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from linkwright.server.limits import BODY_BYTES, JSON_DEPTH, json_depth
 
-__all__ = ["LOOPBACK_HOSTS", "Guard", "attachment", "shown_filename"]
+__all__ = ["LOOPBACK_HOSTS", "Guard", "attachment", "error_response", "shown_filename"]
 
 LOOPBACK_HOSTS = ("127.0.0.1", "localhost", "::1")
 """The names a browser on this machine reaches a loopback-bound workbench by."""
@@ -73,14 +73,14 @@ class Guard:
             brackets = body.count(b"[") + body.count(b"{")
             if brackets > JSON_DEPTH.value and (depth := json_depth(body)) > JSON_DEPTH.value:
                 message = f"body: JSON nested {depth:,} levels, at most {JSON_DEPTH.value} allowed"
-                await _error(422, message)(scope, receive, send)
+                await error_response(422, message)(scope, receive, send)
                 return
         await self.app(scope, _replay(body, last, receive), send)
 
     def _refuse_headers(self, scope: Scope, headers: Headers) -> JSONResponse | None:
         host = headers.get("host", "")
         if self.allowed is not None and _host_name(host) not in self.allowed:
-            return _error(
+            return error_response(
                 421,
                 f"host: this workbench answers to {', '.join(sorted(self.allowed))} only, "
                 f"not {_short(host)!r}",
@@ -89,7 +89,7 @@ class Guard:
         if scope["method"] not in _SAFE_METHODS and origin is not None:
             parts = urlsplit(origin) if origin != "null" else None
             if parts is None or parts.netloc.lower() != host.lower():
-                return _error(
+                return error_response(
                     403,
                     f"origin: a page at {_short(origin)!r} may not change this workbench "
                     "(cross-site requests are refused)",
@@ -97,9 +97,11 @@ class Guard:
         length = headers.get("content-length")
         if length is not None:
             if not (length.isascii() and length.isdigit()):
-                return _error(400, f"content-length: not a number of bytes: {_short(length)!r}")
+                return error_response(
+                    400, f"content-length: not a number of bytes: {_short(length)!r}"
+                )
             if int(length) > BODY_BYTES.value:
-                return _error(
+                return error_response(
                     413,
                     f"request body: {int(length):,} bytes, over the {BODY_BYTES.value:,} allowed",
                 )
@@ -121,7 +123,7 @@ class Guard:
                 return (
                     b"",
                     None,
-                    _error(
+                    error_response(
                         413,
                         f"request body: over the {BODY_BYTES.value:,} bytes allowed "
                         f"({size:,} received so far)",
@@ -156,8 +158,13 @@ def _replay(body: bytes, last: Message | None, receive: Receive) -> Receive:
     return replay
 
 
-def _error(status: int, message: str) -> JSONResponse:
-    return JSONResponse({"error": " ".join(message.splitlines())}, status_code=status)
+def error_response(
+    status: int, message: str, headers: dict[str, str] | None = None
+) -> JSONResponse:
+    """The API's error answer: ``{"error": "..."}`` on one line, whatever a message quoted
+    from the request held."""
+    line = " ".join(message.splitlines()) or f"HTTP {status}"
+    return JSONResponse({"error": line}, status_code=status, headers=headers)
 
 
 def _short(text: str, most: int = 80) -> str:

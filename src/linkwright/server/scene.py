@@ -714,11 +714,8 @@ def drag(document: Any, joint: str, to: Any, at: float) -> dict[str, Any]:
         # nor underflows.
         target = target / biggest
         target = target / np.linalg.norm(target)
-    elif biggest > WORKING_RANGE.max_size:
-        raise DragError(
-            f"to: a coordinate over {WORKING_RANGE.max_size:g} in size (outside linkwright's "
-            f"working range), got {to!r}"
-        )
+    elif problem := WORKING_RANGE.size_problem(biggest):
+        raise DragError(f"to: a coordinate {problem}")
     if not math.isfinite(at):
         raise DragError(f"at: must be a finite angle in degrees, got {at!r}")
     theta = math.radians(at)

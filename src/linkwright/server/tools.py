@@ -190,12 +190,12 @@ def _points(raw: Sequence[Sequence[float]], least: int, field: str = "points") -
     if bad.any():
         raise ToolsError(f"{field}: row {int(np.flatnonzero(bad)[0])} is not finite")
     # A document's working range: beyond it squared distances overflow (1e200² is inf).
-    huge = np.any(np.abs(p) > WORKING_RANGE.max_size, axis=1)
-    if huge.any():
-        raise ToolsError(
-            f"{field}: row {int(np.flatnonzero(huge)[0])} has a coordinate over "
-            f"{WORKING_RANGE.max_size:g} in size (outside linkwright's working range)"
-        )
+    largest = np.abs(p).max(axis=1, initial=0.0)
+    huge = np.flatnonzero(largest > WORKING_RANGE.max_size)
+    if huge.size:
+        row = int(huge[0])
+        problem = WORKING_RANGE.size_problem(float(largest[row]))
+        raise ToolsError(f"{field}: row {row}: a coordinate {problem}")
     return p
 
 
@@ -738,11 +738,8 @@ def _trammel_of(value: dict[str, Any]) -> Trammel:
         raise EllipseError("ellipse: center, axes and angle must be finite")
     if not (a > 0 and b > 0):
         raise EllipseError(f"ellipse.axes: both semi-axes must be positive, got [{a}, {b}]")
-    if max(abs(cx), abs(cy), a, b) > WORKING_RANGE.max_size:
-        raise EllipseError(
-            f"ellipse: centre and axes must be at most {WORKING_RANGE.max_size:g} in size "
-            "(outside linkwright's working range)"
-        )
+    if problem := WORKING_RANGE.size_problem(max(abs(cx), abs(cy), a, b)):
+        raise EllipseError(f"ellipse: centre and axes {problem}")
     if a < b:  # the major axis is the other one
         a, b, angle = b, a, angle + 90.0
     beta = math.radians((angle + 90.0) % 180.0 - 90.0)
