@@ -45,6 +45,7 @@ from linkwright.server.library import (
     LibraryError,
     LibraryNotFound,
 )
+from linkwright.server.limits import TITLE
 
 CRANK_ROCKER = {
     "format": "linkwright/1",
@@ -711,11 +712,13 @@ WRITER = textwrap.dedent(
     base = json.loads(sys.argv[3])
     lib = module.Library(path)
 
+    fill_step, fill_period = int(sys.argv[5]), int(sys.argv[6])
+
     def document(k):
-        # Each revision larger than the last (up to ~60 kB, many database pages), so a torn
+        # Each revision larger than the last (up to the title's limit, ~2 kB), so a torn
         # write would show as a broken document rather than pass unnoticed.
         doc = copy.deepcopy(base)
-        doc["title"] = f"rev {k} " + "·" * (150 * (k % 400))
+        doc["title"] = f"rev {k} " + "·" * (fill_step * (k % fill_period))
         doc["mechanism"]["crank"] = 1.0 + (k % 50) / 100
         return doc
 
@@ -733,6 +736,10 @@ WRITER = textwrap.dedent(
             print("N", entry["id"], entry["name"], flush=True)
     """
 )
+# The writer's titles grow by FILL_STEP characters a revision and wrap before the title's limit
+# (a title over it is refused, which would end the writer before it is killed).
+FILL_STEP = 7
+FILL_PERIOD = (TITLE.value - len("rev 1000000 ")) // FILL_STEP
 
 
 def test_nothing_lost_when_a_writer_is_killed_mid_save(tmp_path: Path) -> None:
@@ -746,9 +753,10 @@ def test_nothing_lost_when_a_writer_is_killed_mid_save(tmp_path: Path) -> None:
     for run in range(5):
         out = tmp_path / f"writer{run}.out"
         err = tmp_path / f"writer{run}.err"
+        argv = [str(path), str(run), base, library_source, str(FILL_STEP), str(FILL_PERIOD)]
         with open(out, "wb") as stdout, open(err, "wb") as stderr:
             child = subprocess.Popen(
-                [sys.executable, "-c", WRITER, str(path), str(run), base, library_source],
+                [sys.executable, "-c", WRITER, *argv],
                 stdout=stdout,
                 stderr=stderr,
             )
@@ -788,7 +796,9 @@ def test_nothing_lost_when_a_writer_is_killed_mid_save(tmp_path: Path) -> None:
             assert (doc.family, doc.title) == (got["family"], got["title"])
             assert doc.title is not None
             k = int(doc.title.split()[1])
-            assert len(doc.title) == len(f"rev {k} ") + 150 * (k % 400), f"run {run}: torn"
+            assert len(doc.title) == len(f"rev {k} ") + FILL_STEP * (k % FILL_PERIOD), (
+                f"run {run}: torn"
+            )
         assert len(growing) <= 1
         for eid, revision in growing.items():
             assert entries[eid]["name"] == "growing", f"run {run} (killed after {delay:.3f} s)"
