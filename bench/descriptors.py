@@ -5,9 +5,9 @@ own so that the peak resident memory it reports is this case's alone. Prints one
 rate (curves per second, simulation and descriptors together), the peak RSS, and the NumPy
 reference's rate on a slice of the same work, measured in the same run.
 
-Memory is bounded by the batch, not by N: each batch's joint positions go into the same
-preallocated arrays, and each batch's descriptors (float32, 4·harmonics per curve) are appended
-to a file, as an atlas shard would be.
+Memory is bounded by the batch, not by N: each batch's coupler points (P alone: the descriptors
+need no other joint) go into the same preallocated array, and each batch's descriptors (float32,
+4·harmonics per curve) are appended to a file, as an atlas shard would be.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from run import crank_rockers
 
 from linkwright.curves import descriptors
 from linkwright.curves.fourier import DEFAULT_HARMONICS, _descriptors_reference
-from linkwright.engine.kernels import fourbar_positions
+from linkwright.engine.kernels import fourbar_coupler_points
 
 FIELDS = ("A0", "B0", "crank", "coupler", "rocker", "u", "v", "assembly")
 
@@ -49,13 +49,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     theta = np.linspace(0.0, 2.0 * np.pi, args.samples, endpoint=False)
     width = 4 * DEFAULT_HARMONICS
-    out = tuple(np.empty((args.batch, args.samples, 2)) for _ in range(3))
+    out = np.empty((args.batch, args.samples, 2))
 
     def batch(start: int, stop: int, seed: int) -> np.ndarray:
         p = crank_rockers(stop - start, seed=seed).params()
         n = stop - start
-        _, _, P = fourbar_positions(*(p[k] for k in FIELDS), theta, out=tuple(o[:n] for o in out))
-        return P
+        return fourbar_coupler_points(*(p[k] for k in FIELDS), theta, out=out[:n])
 
     warm = batch(0, 1000, 0)
     descriptors(warm[:100])

@@ -16,7 +16,7 @@ from linkwright.curves import (
     descriptors,
     resample,
 )
-from linkwright.curves.fourier import _descriptors_reference
+from linkwright.curves.fourier import _descriptors_reference, _turn
 from linkwright.mechanisms import FourBar, solve
 
 
@@ -92,6 +92,18 @@ def test_kernel_matches_numpy_reference():
         np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
         assert np.isnan(got[5]).all() and np.isnan(got[6]).all()
         np.testing.assert_allclose(np.nan_to_num(got), np.nan_to_num(want), atol=1e-12)
+
+
+@settings(max_examples=50, deadline=None)
+@given(t=st.lists(st.floats(0.0, 1.0), min_size=1, max_size=64))
+def test_turn_is_the_unit_circle_to_rounding(t):
+    """The descriptor kernel's polynomial e^{−2πit} against NumPy's, and on the circle."""
+    t = np.asarray(t)
+    got = np.array([_turn(x) for x in t]).reshape(-1, 2)
+    want = np.exp(-2j * np.pi * t)
+    np.testing.assert_allclose(got[:, 0], want.real, rtol=0, atol=2e-15)
+    np.testing.assert_allclose(got[:, 1], want.imag, rtol=0, atol=2e-15)
+    np.testing.assert_allclose(np.hypot(got[:, 0], got[:, 1]), 1.0, rtol=0, atol=1e-15)
 
 
 def test_polygon_coefficients_are_exact():

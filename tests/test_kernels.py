@@ -10,8 +10,10 @@ from hypothesis import strategies as st
 from linkwright.engine import kernels
 from linkwright.engine.kernels import (
     KernelInputError,
+    fourbar_coupler_points,
     fourbar_positions,
     positions,
+    spherical_fourbar_coupler_points,
     spherical_fourbar_positions,
 )
 from linkwright.mechanisms import FourBar, SphericalFourBar, solve
@@ -160,6 +162,28 @@ def test_scalar_batch_and_out_arrays():
     np.testing.assert_array_equal(out[2][0], got["P"])
 
 
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.sampled_from([1, 3, 16, 17, 40]))
+def test_coupler_points_are_the_positions_p(seed, n):
+    """P alone (the atlas's and the descriptors' path) is bit for bit the P of the full kernels,
+    serial (n ≤ 16) and parallel, NaN where the linkage does not assemble, and fills ``out``."""
+    rng = np.random.default_rng(seed)
+    theta = np.linspace(-np.pi, np.pi, 29)
+    planar = _random_fourbars(rng, n)
+    p = planar.params()
+    args = tuple(p[k] for k in ("A0", "B0", "crank", "coupler", "rocker", "u", "v", "assembly"))
+    out = np.full((n, theta.size, 2), 7.0)
+    got = fourbar_coupler_points(*args, theta, out=out)
+    assert got is out
+    np.testing.assert_array_equal(got, fourbar_positions(*args, theta)[2])
+    sphere = _random_spherical(rng, n)
+    q = sphere.params()
+    names = ("frame", "crank", "coupler", "rocker", "point_arc", "point_angle", "assembly")
+    sargs = tuple(q[k] for k in names)
+    want = spherical_fourbar_positions(*sargs, theta)[2]
+    np.testing.assert_array_equal(spherical_fourbar_coupler_points(*sargs, theta), want)
+
+
 def test_bad_input_raises_named_errors():
     theta = [0.0]
     with pytest.raises(KernelInputError, match="theta"):
@@ -176,6 +200,10 @@ def test_bad_input_raises_named_errors():
         spherical_fourbar_positions(1, 1, 1, np.pi, 0, 0, 1, theta)
     with pytest.raises(KernelInputError, match="out"):
         fourbar_positions([0, 0], [4, 0], 1, 5, 3.5, 0, 0, 1, theta, out=(np.empty((1, 2, 2)),) * 3)
+    with pytest.raises(KernelInputError, match="out: P"):
+        fourbar_coupler_points([0, 0], [4, 0], 1, 5, 3.5, 0, 0, 1, theta, out=np.empty((1, 1, 3)))
+    with pytest.raises(KernelInputError, match="out: P"):
+        spherical_fourbar_coupler_points(1, 1, 1, 1, 0, 0, 1, theta, out=np.empty((1, 1, 2)))
     with pytest.raises(KernelInputError, match="SliderCrank"):
         from linkwright.mechanisms import SliderCrank
 

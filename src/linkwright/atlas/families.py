@@ -206,10 +206,10 @@ def curves(family: str, params: Mapping[str, Array], samples: int) -> Array:
         a0 = np.zeros((n, 2))
         b0 = np.stack([p["frame"], np.zeros(n)], axis=-1)
         args = (p["crank"], p["coupler"], p["rocker"], p["u"], p["v"], p["assembly"])
-        return kernels.fourbar_positions(a0, b0, *args, theta)[2]
+        return kernels.fourbar_coupler_points(a0, b0, *args, theta)
     if family == "spherical-fourbar" and kernels.available():
         names = ("frame", "crank", "coupler", "rocker", "point_arc", "point_angle", "assembly")
-        return kernels.spherical_fourbar_positions(*(p[k] for k in names), theta)[2]
+        return kernels.spherical_fourbar_coupler_points(*(p[k] for k in names), theta)
     mech = MODELS[family].local(p, p["assembly"])
     return solve(mech, theta, order=0).positions["P"]
 

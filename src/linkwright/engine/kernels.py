@@ -3,7 +3,8 @@
 The construction plan (:mod:`linkwright.engine.plan`) evaluates any linkage as a sequence of
 whole-array NumPy steps; each step allocates its temporaries, so a batch of n mechanisms ×
 samples inputs streams through memory a few dozen times. These kernels place A, B and P of a
-four-bar in one pass per sample, writing only the results, with the formulas and conventions of
+four-bar in one pass per sample, writing only the results (or P alone, for work that needs only
+the coupler curves), with the formulas and conventions of
 the plan's steps (Crank, DyadRRR, Rigid; SphereCrank, SphereDyad, SphereRigid):
 
 - planar: A = A0 + crank·(cos θ, sin θ); B = circle(A, coupler) ∩ circle(B0, rocker) on the
@@ -36,10 +37,12 @@ __all__ = [
     "KernelInputError",
     "available",
     "compiled",
+    "fourbar_coupler_points",
     "fourbar_motion",
     "fourbar_positions",
     "positions",
     "prepared_fourbar",
+    "spherical_fourbar_coupler_points",
     "spherical_fourbar_positions",
 ]
 
@@ -56,7 +59,9 @@ class KernelInputError(ValueError):
     """Arguments a kernel cannot take (names the argument and the problem)."""
 
 
-def _planar_kernel(a0, b0, crank, coupler, rocker, u, v, assembly, cos_t, sin_t, tol, A, B, P):
+def _planar_kernel(
+    a0, b0, crank, coupler, rocker, u, v, assembly, cos_t, sin_t, tol, store_ab, A, B, P
+):
     n = a0.shape[0]
     samples = cos_t.shape[0]
     nan = np.nan
@@ -96,11 +101,13 @@ def _planar_kernel(a0, b0, crank, coupler, rocker, u, v, assembly, cos_t, sin_t,
                 rows[3, j] = ay + ey + bad
                 rows[4, j] = ax + (ui * ex - vi * ey) + bad
                 rows[5, j] = ay + (ui * ey + vi * ex) + bad
+            if store_ab:
+                for j in range(samples):
+                    A[i, j, 0] = rows[0, j]
+                    A[i, j, 1] = rows[1, j]
+                    B[i, j, 0] = rows[2, j]
+                    B[i, j, 1] = rows[3, j]
             for j in range(samples):
-                A[i, j, 0] = rows[0, j]
-                A[i, j, 1] = rows[1, j]
-                B[i, j, 0] = rows[2, j]
-                B[i, j, 1] = rows[3, j]
                 P[i, j, 0] = rows[4, j]
                 P[i, j, 1] = rows[5, j]
 
@@ -190,8 +197,9 @@ def _planar_motion_kernel(
 
 
 def _spherical_kernel(
-    frame, crank, coupler, rocker, point_arc, point_angle, assembly, cos_t, sin_t, tol, A, B, P
-):
+    frame, crank, coupler, rocker, point_arc, point_angle, assembly, cos_t, sin_t, tol, store_ab,
+    A, B, P,
+):  # fmt: skip
     n = frame.shape[0]
     samples = cos_t.shape[0]
     nan = np.nan
@@ -271,10 +279,13 @@ def _spherical_kernel(
                 rows[6, j] = pa * ax + pb * bx + pc * ox + bad
                 rows[7, j] = pa * ay + pb * by + pc * oy + bad
                 rows[8, j] = pa * az + pb * bz + pc * oz + bad
+            if store_ab:
+                for j in range(samples):
+                    for k in range(3):
+                        A[i, j, k] = rows[k, j]
+                        B[i, j, k] = rows[3 + k, j]
             for j in range(samples):
                 for k in range(3):
-                    A[i, j, k] = rows[k, j]
-                    B[i, j, k] = rows[3 + k, j]
                     P[i, j, k] = rows[6 + k, j]
 
 
@@ -303,13 +314,19 @@ def available() -> bool:
 
 
 def compiled(
-    plain: Callable[..., Any], parallel: bool = True, reassociate: bool = False
+    plain: Callable[..., Any],
+    parallel: bool = True,
+    reassociate: bool = False,
+    helpers: tuple[Callable[..., Any], ...] = (),
 ) -> Callable[..., Any]:
     """``plain`` compiled by numba (cached on disk, so a later process pays no compile), or
     ``plain`` itself without numba. A loop over ``prange`` in ``plain``'s module runs on all
     threads when ``parallel``; that module defines ``prange = range`` for the interpreted case.
     ``reassociate`` lets LLVM reorder sums (so it can vectorise reductions): results then differ
     from the interpreted ones in the last bits. NaN and infinity keep their meaning either way.
+    ``helpers`` are plain functions of the same module that ``plain`` calls: they are compiled
+    too, inlined where they are called (so that loops calling them still vectorise), and stand
+    compiled under their own names in that module from then on.
     """
     key = (plain, parallel, reassociate)
     if key not in _KERNELS:
@@ -317,8 +334,13 @@ def compiled(
         if numba is None:
             _KERNELS[key] = plain
         else:
-            # Resolved as a global when numba compiles the loops.
+            # Resolved as globals when numba compiles the loops.
             plain.__globals__["prange"] = numba.prange
+            for helper in helpers:
+                source = getattr(helper, "py_func", helper)  # compiled by an earlier call
+                plain.__globals__[source.__name__] = numba.njit(
+                    cache=True, inline="always", error_model="numpy"
+                )(source)
             fastmath = {"reassoc", "contract"} if reassociate else False
             # NumPy's error model: a division by zero at a sample that cannot close gives inf or
             # NaN (masked by ``bad``) as it does interpreted, instead of raising mid-batch.
@@ -375,30 +397,48 @@ def _check_signs(assembly: Array) -> None:
         raise KernelInputError("assembly: must be 1 or -1")
 
 
+def _output(out: Array | None, name: str, shape: tuple[int, ...]) -> Array:
+    if out is None:
+        return np.empty(shape)
+    if not (
+        isinstance(out, np.ndarray)
+        and out.shape == shape
+        and out.dtype == np.float64
+        and out.flags.c_contiguous
+        and out.flags.writeable
+    ):
+        raise KernelInputError(
+            f"out: {name} must be a writeable C-contiguous float64 array of shape {shape}"
+        )
+    return out
+
+
 def _outputs(out: Triple | None, shape: tuple[int, ...]) -> Triple:
     if out is None:
         return np.empty(shape), np.empty(shape), np.empty(shape)
     if len(out) != 3:
         raise KernelInputError("out: must be three arrays (A, B, P)")
-    for name, a in zip("ABP", out, strict=True):
-        if not (
-            isinstance(a, np.ndarray)
-            and a.shape == shape
-            and a.dtype == np.float64
-            and a.flags.c_contiguous
-            and a.flags.writeable
-        ):
-            raise KernelInputError(
-                f"out: {name} must be a writeable C-contiguous float64 array of shape {shape}"
-            )
-    return out[0], out[1], out[2]
+    A, B, P = (_output(a, name, shape) for name, a in zip("ABP", out, strict=True))
+    return A, B, P
+
+
+def _position_outputs(out: Any, shape: tuple[int, ...], coupler_only: bool) -> tuple:
+    """What a position kernel takes last: whether it stores A and B, and A, B, P. Where only P
+    is asked for, A and B are empty placeholders (nothing is written to them), and ``out`` is
+    P's array alone."""
+    if coupler_only:
+        unstored = np.empty((0, 0, shape[-1]))
+        return False, unstored, unstored, _output(out, "P", shape)
+    return (True, *_outputs(out, shape))
 
 
 def _planar_args(
-    A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, order: int = 0
-) -> tuple:
+    A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, order: int = 0,
+    coupler_only: bool = False,
+) -> tuple:  # fmt: skip
     """The planar kernel's arguments, checked and broadcast, its outputs last (three for
-    positions; nine, grouped as positions, velocities, accelerations, for ``order`` 2)."""
+    positions, after whether A and B are stored; nine, grouped as positions, velocities,
+    accelerations, for ``order`` 2)."""
     p = _per_mechanism(
         dict(
             A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=assembly
@@ -416,7 +456,7 @@ def _planar_args(
         p["assembly"], cos_t, sin_t, ASSEMBLY_TOL,
     )  # fmt: skip
     if order == 0:
-        return (*head, *_outputs(out, shape))
+        return (*head, *_position_outputs(out, shape, coupler_only))
     if order != 2:
         raise KernelInputError(f"order: must be 0 (positions) or 2 (with derivatives), got {order}")
     groups = (None, None, None) if out is None else out
@@ -478,6 +518,37 @@ def fourbar_positions(
     args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out)
     _kernel("planar", parallel=args[2].shape[0] > CHUNK)(*args)
     return args[-3:]
+
+
+def fourbar_coupler_points(
+    A0: ArrayLike,
+    B0: ArrayLike,
+    crank: ArrayLike,
+    coupler: ArrayLike,
+    rocker: ArrayLike,
+    u: ArrayLike,
+    v: ArrayLike,
+    assembly: ArrayLike,
+    theta: ArrayLike,
+    out: Array | None = None,
+) -> Array:
+    """P alone of :func:`fourbar_positions`, shape (n, samples, 2): a third of its stores, for
+    work that needs only the coupler curves (descriptors, an atlas).
+
+    ``out`` is an optional preallocated P, float64 C-contiguous (n, samples, 2).
+
+    Examples
+    --------
+    >>> fourbar_coupler_points([0, 0], [4, 0], 1, 5, 3.5, 2.5, 1.0, 1, [0.0]).round(6)
+    array([[[2.123751, 2.446872]]])
+    >>> fourbar_coupler_points([0, 0], [10, 0], 1, 2, 3, 0, 0, 1, [0.0])
+    array([[[nan, nan]]])
+    """
+    args = _planar_args(
+        A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, coupler_only=True
+    )
+    _kernel("planar", parallel=args[2].shape[0] > CHUNK)(*args)
+    return args[-1]
 
 
 def fourbar_motion(
@@ -613,6 +684,42 @@ def spherical_fourbar_positions(
     >>> spherical_fourbar_positions(*np.radians([90, 10, 20, 30, 0, 0]), 1, [0.0])[1]
     array([[[nan, nan, nan]]])
     """
+    spherical = (frame, crank, coupler, rocker, point_arc, point_angle, assembly)
+    return _spherical_run(*spherical, theta, out, coupler_only=False)
+
+
+def spherical_fourbar_coupler_points(
+    frame: ArrayLike,
+    crank: ArrayLike,
+    coupler: ArrayLike,
+    rocker: ArrayLike,
+    point_arc: ArrayLike,
+    point_angle: ArrayLike,
+    assembly: ArrayLike,
+    theta: ArrayLike,
+    out: Array | None = None,
+) -> Array:
+    """P alone of :func:`spherical_fourbar_positions`, shape (n, samples, 3): a third of its
+    stores, for work that needs only the coupler curves (descriptors, an atlas).
+
+    ``out`` is an optional preallocated P, float64 C-contiguous (n, samples, 3).
+
+    Examples
+    --------
+    >>> fig6 = np.radians([40, 20, 45, 35, 50, 130])
+    >>> P = spherical_fourbar_coupler_points(*fig6, 1, [0.0, 1.0])
+    >>> bool(np.array_equal(P, spherical_fourbar_positions(*fig6, 1, [0.0, 1.0])[2]))
+    True
+    >>> spherical_fourbar_coupler_points(*np.radians([90, 10, 20, 30, 0, 0]), 1, [0.0])
+    array([[[nan, nan, nan]]])
+    """
+    spherical = (frame, crank, coupler, rocker, point_arc, point_angle, assembly)
+    return _spherical_run(*spherical, theta, out, coupler_only=True)
+
+
+def _spherical_run(
+    frame, crank, coupler, rocker, point_arc, point_angle, assembly, theta, out, coupler_only
+) -> Any:
     p = _per_mechanism(
         dict(
             frame=frame, crank=crank, coupler=coupler, rocker=rocker,
@@ -626,12 +733,12 @@ def spherical_fourbar_positions(
     _check_signs(p["assembly"])
     cos_t, sin_t = _theta(theta)
     n = p["frame"].shape[0]
-    A, B, P = _outputs(out, (n, cos_t.shape[0], 3))
+    outputs = _position_outputs(out, (n, cos_t.shape[0], 3), coupler_only)
     _kernel("sphere", parallel=n > CHUNK)(
         p["frame"], p["crank"], p["coupler"], p["rocker"], p["point_arc"], p["point_angle"],
-        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, A, B, P,
+        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, *outputs,
     )  # fmt: skip
-    return A, B, P
+    return outputs[-1] if coupler_only else outputs[1:]
 
 
 def positions(mechanism: Any, theta: ArrayLike) -> dict[str, Array]:
