@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
             for i, start in enumerate(range(0, args.curves, args.batch)):
                 stop = min(args.curves, start + args.batch)
                 d = descriptors(batch(start, stop, seed=1000 + i))
-                sink.write(d.astype(np.float32).tobytes())
+                d.astype(np.float32).tofile(sink)
         elapsed = time.perf_counter() - t0
         peak = peak_rss()
         kept = np.fromfile(path, dtype=np.float32).reshape(-1, width)

@@ -19,6 +19,7 @@ from linkwright.engine.kernels import (
 from linkwright.mechanisms import FourBar, SphericalFourBar, solve
 
 numba = pytest.importorskip("numba")
+prange = range  # numba.prange where compiled() compiles this module's functions
 
 
 def _random_fourbars(rng: np.random.Generator, n: int) -> FourBar:
@@ -182,6 +183,61 @@ def test_coupler_points_are_the_positions_p(seed, n):
     sargs = tuple(q[k] for k in names)
     want = spherical_fourbar_positions(*sargs, theta)[2]
     np.testing.assert_array_equal(spherical_fourbar_coupler_points(*sargs, theta), want)
+
+
+def test_streaming_stores_give_the_same_numbers(monkeypatch):
+    """Large outputs go to memory with streaming stores: the same numbers as plain stores, for
+    every joint and for P alone, serial and parallel; an output that is not 16-byte aligned (a
+    view NumPy did not allocate) is written with plain stores, also correctly."""
+    rng = np.random.default_rng(11)
+    theta = np.linspace(-np.pi, np.pi, 45)
+    for n in (3, 50):
+        p = _random_fourbars(rng, n).params()
+        args = tuple(p[k] for k in ("A0", "B0", "crank", "coupler", "rocker", "u", "v"))
+        args += (p["assembly"],)
+        monkeypatch.setattr(kernels, "STREAM_BYTES", 2**62)
+        plain = fourbar_positions(*args, theta)
+        monkeypatch.setattr(kernels, "STREAM_BYTES", 0)
+        assert kernels._streams(*plain)
+        streamed = fourbar_positions(*args, theta)
+        for a, b in zip(plain, streamed, strict=True):
+            np.testing.assert_array_equal(a, b)
+        np.testing.assert_array_equal(fourbar_coupler_points(*args, theta), plain[2])
+        buffer = np.empty(n * theta.size * 2 + 1)
+        skip = 1 if buffer.ctypes.data % 16 == 0 else 0
+        shifted = buffer[skip : skip + plain[2].size].reshape(plain[2].shape)
+        assert not kernels._streams(shifted)
+        got = fourbar_coupler_points(*args, theta, out=shifted)
+        np.testing.assert_array_equal(got, plain[2])
+    # Interpreted, the streaming helpers are plain stores (and the module keeps them plain).
+    monkeypatch.setattr(kernels, "_numba", lambda: None)
+    monkeypatch.setattr(kernels, "_KERNELS", {})
+    interpreted = fourbar_positions(*(a[:2] for a in args), theta[:5])
+    monkeypatch.undo()
+    compiled = fourbar_positions(*(a[:2] for a in args), theta[:5])
+    for a, b in zip(interpreted, compiled, strict=True):
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-15)
+
+
+def _thread_of_each(out):
+    for i in prange(out.shape[0]):
+        out[i] = numba.get_thread_id()
+
+
+def test_serial_and_parallel_variants_are_cached_apart(monkeypatch, tmp_path):
+    """numba's disk cache keys a function by name and bytecode, not by its options: a serial
+    variant compiled first used to be loaded for the parallel one too, which then ran on one
+    thread (the spherical kernel at half its speed)."""
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one thread: a parallel loop cannot show itself")
+    monkeypatch.setattr(numba.config, "CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(kernels, "_KERNELS", {})
+    threads = np.full(256, -1.0)
+    kernels.compiled(_thread_of_each, parallel=False)(threads)
+    assert set(threads) == {0.0}
+    kernels.compiled(_thread_of_each, parallel=True)(threads)
+    assert len(set(threads)) > 1
+    assert len(list(tmp_path.rglob("*.nbi"))) == 2  # two cache entries, one per variant
 
 
 def test_bad_input_raises_named_errors():

@@ -65,7 +65,7 @@ Array = NDArray[np.float64]
 DEFAULT_SAMPLES = 64
 DEFAULT_HARMONICS = 8
 
-prange = range  # numba.prange once the batch kernel is compiled
+prange = range  # numba.prange in the compiled kernel's own namespace
 
 
 class CurveError(ValueError):

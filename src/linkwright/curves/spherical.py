@@ -98,7 +98,7 @@ CHUNK = 2048  # curves per pass: bounds the temporaries (chunk × points × 3) w
 POLES = 3  # m̂, e, −e
 VARIANTS = 4 * POLES
 
-prange = range  # numba.prange once the kernel is compiled
+prange = range  # numba.prange in the compiled kernel's own namespace
 
 
 def _as_sphere_curves(points: ArrayLike, normalise: bool = True) -> Array:

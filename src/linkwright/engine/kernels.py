@@ -25,6 +25,7 @@ same loops run as plain Python (correct, but only fit for a handful of samples).
 from __future__ import annotations
 
 import math
+import types
 from collections.abc import Callable
 from typing import Any
 
@@ -49,20 +50,87 @@ __all__ = [
 Array = NDArray[np.float64]
 Triple = tuple[Array, Array, Array]
 
-prange = range  # replaced by numba.prange when the kernels are compiled
+prange = range  # numba.prange in the compiled kernels' own namespace (see compiled)
 
 # Mechanisms per parallel task: each task fills a scratch block that stays in cache.
 CHUNK = 16
+
+# Outputs larger than this (about a last-level cache's share) are written with streaming stores:
+# a plain store first reads its cache line from memory, so a kernel writing far more than the
+# caches hold runs at the copy bandwidth; a streaming store does not, and runs at the store
+# bandwidth (1.6x faster for case (a) of bench/run.py). Smaller outputs stay in the caches for
+# whoever reads them next.
+STREAM_BYTES = 8 * 2**20
+
+
+def _stream_pair(out, index, x, y):
+    """Store (x, y) as pair ``index`` of the doubles of ``out`` (C-contiguous, last axis 2,
+    16-byte aligned). Compiled, this is one streaming (non-temporal) 16-byte store."""
+    pairs = out.reshape(-1, 2)
+    pairs[index, 0] = x
+    pairs[index, 1] = y
+
+
+def _store_fence():
+    """Compiled, a full memory fence: streaming stores are weakly ordered, and must be visible
+    before a thread reports its part of a parallel loop done. Interpreted, nothing to do."""
+
+
+def _stream_pair_form(numba: Any) -> Any:
+    from llvmlite import ir
+
+    @numba.extending.intrinsic
+    def stream_pair(typingctx, out, index, x, y):
+        def codegen(context, builder, signature, args):
+            array, position, first, second = args
+            data = context.make_array(signature.args[0])(context, builder, array).data
+            pair = ir.VectorType(ir.DoubleType(), 2)
+            address = builder.gep(builder.bitcast(data, pair.as_pointer()), [position])
+            value = ir.Constant(pair, ir.Undefined)
+            for lane, part in enumerate((first, second)):
+                value = builder.insert_element(value, part, ir.Constant(ir.IntType(32), lane))
+            store = builder.store(value, address, align=16)
+            flag = builder.module.add_metadata([ir.Constant(ir.IntType(32), 1)])
+            store.set_metadata("nontemporal", flag)
+            return context.get_dummy_value()
+
+        return numba.types.void(out, index, x, y), codegen
+
+    return stream_pair
+
+
+def _store_fence_form(numba: Any) -> Any:
+    @numba.extending.intrinsic
+    def store_fence(typingctx):
+        def codegen(context, builder, signature, args):
+            builder.fence("seq_cst")
+            return context.get_dummy_value()
+
+        return numba.types.void(), codegen
+
+    return store_fence
+
+
+_stream_pair.numba_form = _stream_pair_form  # type: ignore[attr-defined]
+_store_fence.numba_form = _store_fence_form  # type: ignore[attr-defined]
+STREAMING = (_stream_pair, _store_fence)
+
+
+def _streams(*outputs: Array) -> bool:
+    """Whether a kernel writes ``outputs`` with streaming stores: large enough, and aligned as
+    a 16-byte store needs (NumPy's own arrays always are; a view from elsewhere may not be)."""
+    stored = [a for a in outputs if a.size]
+    return sum(a.nbytes for a in stored) > STREAM_BYTES and all(
+        a.ctypes.data % 16 == 0 for a in stored
+    )
 
 
 class KernelInputError(ValueError):
     """Arguments a kernel cannot take (names the argument and the problem)."""
 
 
-def _planar_kernel(
-    a0, b0, crank, coupler, rocker, u, v, assembly, cos_t, sin_t, tol, store_ab, A, B, P
-):
-    n = a0.shape[0]
+def _planar_kernel(params, cos_t, sin_t, tol, store_ab, stream, A, B, P):
+    n = params.shape[0]
     samples = cos_t.shape[0]
     nan = np.nan
     for c in prange((n + CHUNK - 1) // CHUNK):
@@ -71,16 +139,17 @@ def _planar_kernel(
         # interleaving copy that follows runs from cache.
         rows = np.empty((6, samples))
         for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            ax0, ay0, bx0, by0 = a0[i, 0], a0[i, 1], b0[i, 0], b0[i, 1]
-            r0, r1, r2 = crank[i], coupler[i], rocker[i]
+            # Columns as PLANAR_FIELDS: A0, B0, crank, coupler, rocker, u, v, assembly.
+            ax0, ay0, bx0, by0 = params[i, 0], params[i, 1], params[i, 2], params[i, 3]
+            r0, r1, r2 = params[i, 4], params[i, 5], params[i, 6]
             # The DyadRRR step's factored forms, hoisted out of the sample loop.
             sum2 = (r1 + r2) ** 2
             dif2 = (r1 - r2) ** 2
             prod = (r1 - r2) * (r1 + r2)
-            half_sign = 0.5 * assembly[i]
+            half_sign = 0.5 * params[i, 9]
             quarter_r1 = 0.25 / (r1 * r1)
             # P = A + (u·e + v·perp(e))/r1 with e = B − A, whose length is r1 by construction.
-            ui, vi = u[i] / r1, v[i] / r1
+            ui, vi = params[i, 7] / r1, params[i, 8] / r1
             for j in range(samples):
                 ax = ax0 + r0 * cos_t[j]
                 ay = ay0 + r0 * sin_t[j]
@@ -101,6 +170,15 @@ def _planar_kernel(
                 rows[3, j] = ay + ey + bad
                 rows[4, j] = ax + (ui * ex - vi * ey) + bad
                 rows[5, j] = ay + (ui * ey + vi * ex) + bad
+            if stream:
+                first = i * samples
+                if store_ab:
+                    for j in range(samples):
+                        _stream_pair(A, first + j, rows[0, j], rows[1, j])
+                        _stream_pair(B, first + j, rows[2, j], rows[3, j])
+                for j in range(samples):
+                    _stream_pair(P, first + j, rows[4, j], rows[5, j])
+                continue
             if store_ab:
                 for j in range(samples):
                     A[i, j, 0] = rows[0, j]
@@ -110,27 +188,28 @@ def _planar_kernel(
             for j in range(samples):
                 P[i, j, 0] = rows[4, j]
                 P[i, j, 1] = rows[5, j]
+        if stream:
+            _store_fence()
 
 
 def _planar_motion_kernel(
-    a0, b0, crank, coupler, rocker, u, v, assembly, cos_t, sin_t, tol, sing_sin, sing_margin,
-    A, B, P, VA, VB, VP, AA, AB, AP,
-):  # fmt: skip
-    n = a0.shape[0]
+    params, cos_t, sin_t, tol, sing_sin, sing_margin, A, B, P, VA, VB, VP, AA, AB, AP
+):
+    n = params.shape[0]
     samples = cos_t.shape[0]
     nan = np.nan
     for c in prange((n + CHUNK - 1) // CHUNK):
         rows = np.empty((18, samples))
         for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            ax0, ay0, bx0, by0 = a0[i, 0], a0[i, 1], b0[i, 0], b0[i, 1]
-            r0, r1, r2 = crank[i], coupler[i], rocker[i]
+            ax0, ay0, bx0, by0 = params[i, 0], params[i, 1], params[i, 2], params[i, 3]
+            r0, r1, r2 = params[i, 4], params[i, 5], params[i, 6]
             sum2 = (r1 + r2) ** 2
             dif2 = (r1 - r2) ** 2
             prod = (r1 - r2) * (r1 + r2)
-            half_sign = 0.5 * assembly[i]
+            half_sign = 0.5 * params[i, 9]
             quarter_r1 = 0.25 / (r1 * r1)
             inv_r1r2 = 1.0 / (r1 * r2)
-            ui, vi = u[i] / r1, v[i] / r1
+            ui, vi = params[i, 7] / r1, params[i, 8] / r1
             for j in range(samples):
                 cj, sj = cos_t[j], sin_t[j]
                 ax = ax0 + r0 * cj
@@ -196,21 +275,20 @@ def _planar_motion_kernel(
                     AP[i, j, k2] = rows[16 + k2, j]
 
 
-def _spherical_kernel(
-    frame, crank, coupler, rocker, point_arc, point_angle, assembly, cos_t, sin_t, tol, store_ab,
-    A, B, P,
-):  # fmt: skip
-    n = frame.shape[0]
+def _spherical_kernel(params, cos_t, sin_t, tol, store_ab, A, B, P):
+    n = params.shape[0]
     samples = cos_t.shape[0]
     nan = np.nan
     for c in prange((n + CHUNK - 1) // CHUNK):
         rows = np.empty((9, samples))  # as in the planar kernel: branch-free, vectorised
         for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            bx0, by0 = math.cos(frame[i]), math.sin(frame[i])
-            ca, sa = math.cos(crank[i]), math.sin(crank[i])
-            r1, r2 = coupler[i], rocker[i]
+            # Columns as SPHERE_FIELDS: frame, crank, coupler, rocker, point arc and angle, sign.
+            frame, crank, r1, r2 = params[i, 0], params[i, 1], params[i, 2], params[i, 3]
+            point_arc, point_angle = params[i, 4], params[i, 5]
+            bx0, by0 = math.cos(frame), math.sin(frame)
+            ca, sa = math.cos(crank), math.sin(crank)
             cr1, sr1, cr2 = math.cos(r1), math.sin(r1), math.cos(r2)
-            sign = assembly[i]
+            sign = params[i, 6]
             inv_sr1_2 = 1.0 / (sr1 * sr1)
             # Half-sum and half-difference of the dyad's arcs: the Gram determinant's product
             # form 4 sin s sin(s−d) sin(s−r1) sin(s−r2) (SphereDyad, sphere.gram) expanded in
@@ -218,10 +296,10 @@ def _spherical_kernel(
             # at the roots.
             p, q = 0.5 * (r1 + r2), 0.5 * (r1 - r2)
             cp, sp, cq, sq = math.cos(p), math.sin(p), math.cos(q), math.sin(q)
-            cl = math.cos(point_arc[i])
+            cl = math.cos(point_arc)
             # P = cos(arc)·A' + … in SphereRigid's basis A, B, A × B; |A × B| = sin r1.
-            pb = math.sin(point_arc[i]) * math.cos(point_angle[i]) / sr1
-            pc = math.sin(point_arc[i]) * math.sin(point_angle[i]) / sr1
+            pb = math.sin(point_arc) * math.cos(point_angle) / sr1
+            pc = math.sin(point_arc) * math.sin(point_angle) / sr1
             for j in range(samples):
                 ax = ca
                 ay = sa * cos_t[j]
@@ -324,9 +402,12 @@ def compiled(
     threads when ``parallel``; that module defines ``prange = range`` for the interpreted case.
     ``reassociate`` lets LLVM reorder sums (so it can vectorise reductions): results then differ
     from the interpreted ones in the last bits. NaN and infinity keep their meaning either way.
-    ``helpers`` are plain functions of the same module that ``plain`` calls: they are compiled
-    too, inlined where they are called (so that loops calling them still vectorise), and stand
-    compiled under their own names in that module from then on.
+
+    ``helpers`` are plain functions of the same module that ``plain`` calls. The compiled
+    ``plain`` calls their compiled forms, inlined (so that loops calling them still vectorise):
+    a helper's ``numba_form(numba)``, where it has one (for what only LLVM can say, such as a
+    streaming store), or the helper compiled. The module itself keeps the plain functions, so
+    the interpreted path never meets a compiled object.
     """
     key = (plain, parallel, reassociate)
     if key not in _KERNELS:
@@ -334,19 +415,31 @@ def compiled(
         if numba is None:
             _KERNELS[key] = plain
         else:
-            # Resolved as globals when numba compiles the loops.
-            plain.__globals__["prange"] = numba.prange
+            # The names the compiled loops resolve as globals, in a namespace of their own.
+            namespace = dict(plain.__globals__, prange=numba.prange)
             for helper in helpers:
-                source = getattr(helper, "py_func", helper)  # compiled by an earlier call
-                plain.__globals__[source.__name__] = numba.njit(
-                    cache=True, inline="always", error_model="numpy"
-                )(source)
+                form = getattr(helper, "numba_form", None)
+                namespace[helper.__name__] = (
+                    form(numba)
+                    if form is not None
+                    else numba.njit(cache=True, inline="always", error_model="numpy")(helper)
+                )
+            function = types.FunctionType(
+                plain.__code__, namespace, plain.__name__, plain.__defaults__, plain.__closure__
+            )
+            # numba's disk cache tells functions apart by name and bytecode, not by options:
+            # without a name of its own, the first variant compiled (serial, say) would be
+            # loaded for every other (parallel) from then on.
+            variant = ("parallel" if parallel else "serial") + (
+                "_reassociate" if reassociate else ""
+            )
+            function.__qualname__ = f"{plain.__qualname__}.{variant}"
             fastmath = {"reassoc", "contract"} if reassociate else False
             # NumPy's error model: a division by zero at a sample that cannot close gives inf or
             # NaN (masked by ``bad``) as it does interpreted, instead of raising mid-batch.
             _KERNELS[key] = numba.njit(
                 cache=True, fastmath=fastmath, parallel=parallel, error_model="numpy"
-            )(plain)
+            )(function)
     return _KERNELS[key]
 
 
@@ -357,7 +450,7 @@ def _kernel(name: str, parallel: bool = True) -> Any:
         "planar-motion": _planar_motion_kernel,
         "sphere": _spherical_kernel,
     }[name]
-    return compiled(plain, parallel)
+    return compiled(plain, parallel, helpers=STREAMING)
 
 
 def _theta(theta: ArrayLike) -> tuple[Array, Array]:
@@ -370,26 +463,54 @@ def _theta(theta: ArrayLike) -> tuple[Array, Array]:
     return np.ascontiguousarray(np.cos(t)), np.ascontiguousarray(np.sin(t))
 
 
-def _per_mechanism(values: dict[str, ArrayLike], vectors: frozenset[str]) -> dict[str, Array]:
-    """Broadcast each parameter to n mechanisms: (n,) scalars, (n, 2) points."""
-    arrays = {k: np.asarray(v, dtype=float) for k, v in values.items()}
-    for k, a in arrays.items():
-        if k in vectors and a.shape[-1:] != (2,):
-            raise KernelInputError(f"{k}: must be a point [x, y] or an (n, 2) array, got {a.shape}")
-        if a.ndim > (2 if k in vectors else 1):
-            raise KernelInputError(f"{k}: must be one value per mechanism, got shape {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise KernelInputError(f"{k}: must be finite")
-    sizes = {a.shape[0] for k, a in arrays.items() if a.ndim == (2 if k in vectors else 1)}
-    sizes.discard(1)
+# The columns of the packed parameters each kernel reads (one row per mechanism).
+PLANAR_FIELDS = (("A0", 2), ("B0", 2), ("crank", 1), ("coupler", 1), ("rocker", 1), ("u", 1),
+                 ("v", 1), ("assembly", 1))  # fmt: skip
+SPHERE_FIELDS = (("frame", 1), ("crank", 1), ("coupler", 1), ("rocker", 1), ("point_arc", 1),
+                 ("point_angle", 1), ("assembly", 1))  # fmt: skip
+
+
+def _pack(fields: tuple[tuple[str, int], ...], values: tuple[ArrayLike, ...]) -> Array:
+    """The parameters of n mechanisms as one (n, columns) array, each broadcast to n: a field of
+    width 1 is a value or (n,) values, one of width 2 a point [x, y] or (n, 2) points. One
+    array, checked at once, makes a single call cheap (few arguments, few NumPy calls)."""
+    arrays = []
+    sizes = set()
+    for (name, width), value in zip(fields, values, strict=True):
+        a = np.asarray(value, dtype=float)
+        if width == 2 and a.shape[-1:] != (2,):
+            raise KernelInputError(
+                f"{name}: must be a point [x, y] or an (n, 2) array, got {a.shape}"
+            )
+        per = a.shape[:-1] if width == 2 else a.shape
+        if len(per) > 1:
+            raise KernelInputError(f"{name}: must be one value per mechanism, got shape {a.shape}")
+        if per and per[0] != 1:
+            sizes.add(per[0])
+        arrays.append(a.reshape(-1, width))
     if len(sizes) > 1:
         raise KernelInputError(f"per-mechanism arrays disagree on n: {sorted(sizes)}")
     n = sizes.pop() if sizes else 1
-    out = {}
-    for k, a in arrays.items():
-        shape = (n, 2) if k in vectors else (n,)
-        out[k] = np.ascontiguousarray(np.broadcast_to(a, shape))
-    return out
+    columns = np.cumsum([0] + [width for _, width in fields])
+    packed = np.empty((n, columns[-1]))
+    for a, start, stop in zip(arrays, columns[:-1], columns[1:], strict=True):
+        packed[:, start:stop] = a
+    finite = np.isfinite(packed).all(axis=0)
+    if not finite.all():
+        column = int(np.argmin(finite))
+        name = fields[int(np.searchsorted(columns, column, side="right")) - 1][0]
+        raise KernelInputError(f"{name}: must be finite")
+    return packed
+
+
+def _field(packed: Array, fields: tuple[tuple[str, int], ...], name: str) -> Array:
+    """One field's column(s) of packed parameters (a view)."""
+    start = 0
+    for field, width in fields:
+        if field == name:
+            return packed[:, start] if width == 1 else packed[:, start : start + width]
+        start += width
+    raise KeyError(name)
 
 
 def _check_signs(assembly: Array) -> None:
@@ -432,6 +553,12 @@ def _position_outputs(out: Any, shape: tuple[int, ...], coupler_only: bool) -> t
     return (True, *_outputs(out, shape))
 
 
+def _planar_position_outputs(out: Any, shape: tuple[int, ...], coupler_only: bool) -> tuple:
+    """:func:`_position_outputs` for the planar kernel, which also takes whether it streams."""
+    store_ab, A, B, P = _position_outputs(out, shape, coupler_only)
+    return store_ab, _streams(A, B, P), A, B, P
+
+
 def _planar_args(
     A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, order: int = 0,
     coupler_only: bool = False,
@@ -439,24 +566,16 @@ def _planar_args(
     """The planar kernel's arguments, checked and broadcast, its outputs last (three for
     positions, after whether A and B are stored; nine, grouped as positions, velocities,
     accelerations, for ``order`` 2)."""
-    p = _per_mechanism(
-        dict(
-            A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=assembly
-        ),
-        frozenset({"A0", "B0"}),
-    )
+    params = _pack(PLANAR_FIELDS, (A0, B0, crank, coupler, rocker, u, v, assembly))
     for k in ("crank", "coupler", "rocker"):
-        if np.any(p[k] <= 0):
+        if np.any(_field(params, PLANAR_FIELDS, k) <= 0):
             raise KernelInputError(f"{k}: must be a positive length")
-    _check_signs(p["assembly"])
+    _check_signs(_field(params, PLANAR_FIELDS, "assembly"))
     cos_t, sin_t = _theta(theta)
-    shape = (p["crank"].shape[0], cos_t.shape[0], 2)
-    head = (
-        p["A0"], p["B0"], p["crank"], p["coupler"], p["rocker"], p["u"], p["v"],
-        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL,
-    )  # fmt: skip
+    shape = (params.shape[0], cos_t.shape[0], 2)
+    head = (params, cos_t, sin_t, ASSEMBLY_TOL)
     if order == 0:
-        return (*head, *_position_outputs(out, shape, coupler_only))
+        return (*head, *_planar_position_outputs(out, shape, coupler_only))
     if order != 2:
         raise KernelInputError(f"order: must be 0 (positions) or 2 (with derivatives), got {order}")
     groups = (None, None, None) if out is None else out
@@ -516,7 +635,7 @@ def fourbar_positions(
     (array([[[nan, nan]]]), array([[[nan, nan]]]))
     """
     args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out)
-    _kernel("planar", parallel=args[2].shape[0] > CHUNK)(*args)
+    _kernel("planar", parallel=args[0].shape[0] > CHUNK)(*args)
     return args[-3:]
 
 
@@ -547,7 +666,7 @@ def fourbar_coupler_points(
     args = _planar_args(
         A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, coupler_only=True
     )
-    _kernel("planar", parallel=args[2].shape[0] > CHUNK)(*args)
+    _kernel("planar", parallel=args[0].shape[0] > CHUNK)(*args)
     return args[-1]
 
 
@@ -587,7 +706,7 @@ def fourbar_motion(
     (array([0., 1.]), array([ 1.147915, -0.208333]))
     """
     args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, out, order=2)
-    _kernel("planar-motion", parallel=args[2].shape[0] > CHUNK)(*args)
+    _kernel("planar-motion", parallel=args[0].shape[0] > CHUNK)(*args)
     return args[-9:-6], args[-6:-3], args[-3:]
 
 
@@ -624,7 +743,7 @@ def prepared_fourbar(
     array([ 1.147915, -0.208333])
     """
     args = _planar_args(A0, B0, crank, coupler, rocker, u, v, assembly, theta, None, order)
-    kernel = _kernel("planar" if order == 0 else "planar-motion", parallel=args[2].shape[0] > CHUNK)
+    kernel = _kernel("planar" if order == 0 else "planar-motion", parallel=args[0].shape[0] > CHUNK)
     result = args[-3:] if order == 0 else (args[-9:-6], args[-6:-3], args[-3:])
 
     def run() -> Any:
@@ -720,24 +839,17 @@ def spherical_fourbar_coupler_points(
 def _spherical_run(
     frame, crank, coupler, rocker, point_arc, point_angle, assembly, theta, out, coupler_only
 ) -> Any:
-    p = _per_mechanism(
-        dict(
-            frame=frame, crank=crank, coupler=coupler, rocker=rocker,
-            point_arc=point_arc, point_angle=point_angle, assembly=assembly,
-        ),
-        frozenset(),
-    )  # fmt: skip
+    values = (frame, crank, coupler, rocker, point_arc, point_angle, assembly)
+    params = _pack(SPHERE_FIELDS, values)
     for k in ("frame", "crank", "coupler", "rocker"):
-        if np.any((p[k] <= 0) | (p[k] >= np.pi)):
+        arc = _field(params, SPHERE_FIELDS, k)
+        if np.any((arc <= 0) | (arc >= np.pi)):
             raise KernelInputError(f"{k}: a spherical link's arc must lie strictly in (0, π)")
-    _check_signs(p["assembly"])
+    _check_signs(_field(params, SPHERE_FIELDS, "assembly"))
     cos_t, sin_t = _theta(theta)
-    n = p["frame"].shape[0]
+    n = params.shape[0]
     outputs = _position_outputs(out, (n, cos_t.shape[0], 3), coupler_only)
-    _kernel("sphere", parallel=n > CHUNK)(
-        p["frame"], p["crank"], p["coupler"], p["rocker"], p["point_arc"], p["point_angle"],
-        p["assembly"], cos_t, sin_t, ASSEMBLY_TOL, *outputs,
-    )  # fmt: skip
+    _kernel("sphere", parallel=n > CHUNK)(params, cos_t, sin_t, ASSEMBLY_TOL, *outputs)
     return outputs[-1] if coupler_only else outputs[1:]
 
 
