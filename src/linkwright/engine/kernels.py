@@ -55,11 +55,11 @@ prange = range  # numba.prange in the compiled kernels' own namespace (see compi
 # Mechanisms per parallel task: each task fills a scratch block that stays in cache.
 CHUNK = 16
 
-# Outputs larger than this (about a last-level cache's share) are written with streaming stores:
-# a plain store first reads its cache line from memory, so a kernel writing far more than the
-# caches hold runs at the copy bandwidth; a streaming store does not, and runs at the store
-# bandwidth (1.6x faster for case (a) of bench/run.py). Smaller outputs stay in the caches for
-# whoever reads them next.
+# The planar position kernel writes outputs larger than this (about a last-level cache's share)
+# with streaming stores: a plain store first reads its cache line from memory, so a kernel
+# writing far more than the caches hold runs at the copy bandwidth; a streaming store does not,
+# and runs at the store bandwidth (1.6x faster for case (a) of bench/run.py). Smaller outputs
+# stay in the caches for whoever reads them next.
 STREAM_BYTES = 8 * 2**20
 
 
