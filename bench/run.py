@@ -128,12 +128,14 @@ def streaming_bandwidth(dst: np.ndarray, repeats: int = 5) -> float | None:
 
 
 def kernel_profile(
-    kernels, planar_args, sphere_args, theta, streamed_all: float
+    kernels, planar, sphere, theta, streamed_all: float
 ) -> dict[str, tuple[float, float, float, float]]:
     """What limits each kernel, without hardware counters (this machine's VM has none): its
     rate on one thread and on every thread, each against the most that many threads can store
     (a streaming fill, measured here for one thread; ``streamed_all`` for every thread). A
-    kernel far below its bound on one thread is bound by its arithmetic, not by memory."""
+    kernel far below its bound on one thread is bound by its arithmetic, not by memory.
+    ``planar`` and ``sphere`` are each a kernel's arguments and the outputs cases (a) and (c)
+    already timed it with."""
     import numba
 
     threads = numba.get_num_threads()
@@ -143,13 +145,12 @@ def kernel_profile(
     finally:
         numba.set_num_threads(threads)
     rates = {}
-    for name, fn, args, width in (
-        ("planar kernel (a)", kernels.fourbar_positions, planar_args, 2),
-        ("spherical kernel (c)", kernels.spherical_fourbar_positions, sphere_args, 3),
+    for name, fn, (args, out) in (
+        ("planar kernel (a)", kernels.fourbar_positions, planar),
+        ("spherical kernel (c)", kernels.spherical_fourbar_positions, sphere),
     ):
-        n = args[2].shape[0]
-        out = tuple(np.empty((n, theta.size, width)) for _ in MOVING_JOINTS)
-        joints = len(MOVING_JOINTS) * theta.size * n
+        joints = len(MOVING_JOINTS) * out[0].shape[0] * out[0].shape[1]
+        width = out[0].shape[2]
         measured = []
         for count in (1, threads):
             numba.set_num_threads(count)
@@ -323,7 +324,7 @@ def main(argv: list[str] | None = None) -> int:
     del sref
     times_c = [(name, best_of(fn, args.repeats)) for name, fn in cases_c]
     profile = (
-        kernel_profile(kernels, planar_args, sphere_args, theta, streamed_bandwidth)
+        kernel_profile(kernels, (planar_args, out), (sphere_args, sout), theta, streamed_bandwidth)
         if kernels
         else None
     )

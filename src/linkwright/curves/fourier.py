@@ -272,7 +272,7 @@ def _descriptor_kernel(points, harmonics, closed, out):
             for j in range(n_points, m):  # an open curve runs back along itself
                 zr[j] = points[c, 2 * n_points - 2 - j, 0]
                 zi[j] = points[c, 2 * n_points - 2 - j, 1]
-            zr[m], zi[m] = zr[0], zi[0]  # closed: the last segment returns to the start
+            zr[m], zi[m] = zr[0], zi[0]  # the last segment returns to the first vertex
             length = 0.0
             for j in range(m):
                 dx = zr[j + 1] - zr[j]
