@@ -88,6 +88,7 @@ def test_library_save_rename_load_delete(page, server_url: str):
     assert "already in the library" in page.inner_text("#lib-conflict")
     page.click("#lib-overwrite")
     page.wait_for_selector("#lib-conflict[hidden]", state="attached")
+    wait_state(page, "library")
     expect(entry(page, name)).to_have_count(1)
 
     # Rename it inline.
@@ -122,6 +123,34 @@ def test_library_save_rename_load_delete(page, server_url: str):
     expect(entry(page, renamed)).to_have_count(0)
     names = [e["name"] for e in page.evaluate("fetch('/api/library').then(r => r.json())")]
     assert renamed not in names
+
+
+def test_library_refresh_keeps_an_open_rename(page, server_url: str):
+    """A refresh of the list (another save, the ↻ button) must not throw away a half-typed name."""
+    open_workbench(page, server_url)
+    show_tab(page, "library")
+    name = f"kept crank {uuid.uuid4().hex[:6]}"
+    page.fill("#lib-name", name)
+    page.click("#lib-save")
+    page.wait_for_selector(f"text=saved “{name}” in the library")
+    entry(page, name).locator("[data-testid=lib-rename]").click()
+    field = page.locator("[data-testid=lib-rename-input]")
+    field.fill("half typed")
+    # element.click() from script refreshes without taking the focus, as a save elsewhere would.
+    page.evaluate("document.querySelector('#lib-refresh').click()")
+    page.wait_for_function("document.querySelector('#lib-count').textContent !== ''")
+    page.wait_for_timeout(300)
+    expect(field).to_have_value("half typed")
+    assert page.evaluate("document.activeElement.dataset.testid") == "lib-rename-input"
+    field.press("Escape")
+    expect(field).to_have_count(0)
+    expect(entry(page, name).locator("[data-testid=lib-rename]")).to_have_count(1)
+    # The delete question survives a refresh too, and "Keep" closes it.
+    entry(page, name).locator("[data-testid=lib-delete]").click()
+    page.evaluate("document.querySelector('#lib-refresh').click()")
+    page.wait_for_timeout(300)
+    page.click("[data-testid=lib-delete-cancel]")
+    expect(entry(page, name).locator("[data-testid=lib-delete]")).to_have_count(1)
 
 
 def test_library_import_and_export(page, server_url: str, tmp_path: Path):

@@ -321,10 +321,33 @@
       }
     }
 
+    // A row showing a rename form or a delete question survives a refresh of the list (a save's,
+    // an import's, the ↻ button's): what the person was typing, and where, stays theirs.
+    let editing = null; // { id, li }
+
     function render() {
-      list.replaceChildren(...entries.map(row));
+      if (editing && !entries.some((e) => e.id === editing.id)) editing = null;
+      const focused = list.contains(document.activeElement) ? document.activeElement : null;
+      const selection = focused && typeof focused.selectionStart === "number"
+        ? [focused.selectionStart, focused.selectionEnd] : null;
+      list.replaceChildren(...entries.map((e) => (editing && editing.id === e.id ? editing.li : row(e))));
+      if (focused && focused.isConnected) {
+        focused.focus();
+        if (selection) focused.setSelectionRange(...selection);
+      }
       empty.hidden = entries.length > 0;
       count.textContent = entries.length ? `${entries.length}` : "";
+    }
+
+    function closeEdit() {
+      editing = null;
+      render();
+    }
+
+    function openEdit(li, entry, content) {
+      li.replaceChildren(content);
+      editing = { id: entry.id, li };
+      render(); // a row left open elsewhere goes back to its plain form
     }
 
     function row(entry) {
@@ -404,14 +427,15 @@
       const input = h("input", { type: "text", testid: "lib-rename-input", value: entry.name,
         "aria-label": `new name for ${entry.name}` });
       const ok = h("button", { type: "button", testid: "lib-rename-ok", class: "primary", text: "OK" });
-      const cancel = h("button", { type: "button", testid: "lib-rename-cancel", text: "Cancel", onclick: render });
+      const cancel = h("button", { type: "button", testid: "lib-rename-cancel", text: "Cancel", onclick: closeEdit });
       const form = h("form", { class: "row", onsubmit: async (e) => {
         e.preventDefault();
         const n = input.value.trim();
-        if (!n || n === entry.name) { render(); return; }
+        if (!n || n === entry.name) { closeEdit(); return; }
         setState(root, "running");
         try {
           await call("PATCH", `/api/library/${entry.id}`, { name: n });
+          editing = null;
           lwStatus(`renamed “${entry.name}” to “${n}”`, "info");
           await refresh();
           setState(root, "done");
@@ -422,8 +446,8 @@
         }
       } }, input, ok, cancel);
       ok.addEventListener("click", () => form.requestSubmit());
-      input.addEventListener("keydown", (e) => { if (e.key === "Escape") render(); });
-      li.replaceChildren(form);
+      input.addEventListener("keydown", (e) => { if (e.key === "Escape") closeEdit(); });
+      openEdit(li, entry, form);
       input.focus();
       input.select();
     }
@@ -434,6 +458,7 @@
           setState(root, "running");
           try {
             await call("DELETE", `/api/library/${entry.id}`);
+            editing = null;
             if (current === entry.id) current = null;
             lwStatus(`deleted “${entry.name}” from the library`, "info");
             await refresh();
@@ -443,8 +468,8 @@
             lwStatus(`library: ${e.message}`, "error");
           }
         } });
-      const no = h("button", { type: "button", testid: "lib-delete-cancel", text: "Keep", onclick: render });
-      li.replaceChildren(h("div", { class: "confirm" },
+      const no = h("button", { type: "button", testid: "lib-delete-cancel", text: "Keep", onclick: closeEdit });
+      openEdit(li, entry, h("div", { class: "confirm" },
         h("span", { text: `Delete “${entry.name}”? This cannot be undone.` }), h("div", { class: "row" }, yes, no)));
       no.focus();
     }
