@@ -71,13 +71,19 @@ def entry(page, name: str):
     return page.locator(f"#lib-list [data-testid=lib-entry][data-name={json.dumps(name)}]")
 
 
-def test_library_save_rename_load_delete(page, server_url: str):
+def save_to_library(page, server_url: str, prefix: str) -> str:
+    """Open the workbench's library tab and save the current mechanism under a fresh name."""
     open_workbench(page, server_url)
     show_tab(page, "library")
-    name = f"my crank {uuid.uuid4().hex[:6]}"
+    name = f"{prefix} {uuid.uuid4().hex[:6]}"
     page.fill("#lib-name", name)
     page.click("#lib-save")
     page.wait_for_selector(f"text=saved “{name}” in the library")
+    return name
+
+
+def test_library_save_rename_load_delete(page, server_url: str):
+    name = save_to_library(page, server_url, "my crank")
     row = entry(page, name)
     expect(row).to_have_count(1)
     assert "fourbar" in row.locator("[data-testid=lib-entry-meta]").inner_text()
@@ -127,12 +133,7 @@ def test_library_save_rename_load_delete(page, server_url: str):
 
 def test_library_refresh_keeps_an_open_rename(page, server_url: str):
     """A refresh of the list (another save, the ↻ button) must not throw away a half-typed name."""
-    open_workbench(page, server_url)
-    show_tab(page, "library")
-    name = f"kept crank {uuid.uuid4().hex[:6]}"
-    page.fill("#lib-name", name)
-    page.click("#lib-save")
-    page.wait_for_selector(f"text=saved “{name}” in the library")
+    name = save_to_library(page, server_url, "kept crank")
     entry(page, name).locator("[data-testid=lib-rename]").click()
     field = page.locator("[data-testid=lib-rename-input]")
     field.fill("half typed")
