@@ -12,8 +12,12 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
+# `make run PORT=8001 HOST=0.0.0.0`: another port, or every interface (then a token is printed).
+PORT ?= 8000
+HOST ?= 127.0.0.1
+
 run: $(STAMP)
-	$(BIN)/linkwright serve
+	$(BIN)/linkwright serve --host $(HOST) --port $(PORT)
 
 demo: $(STAMP)
 	$(BIN)/linkwright demo --out out

@@ -279,12 +279,26 @@ def test_report_is_strict_json_with_contract_keys(mech):
     assert json.loads(text) == out
 
 
-def test_report_angles_are_measured_from_the_frame_line():
-    # The same crank-rocker, rotated by 40° and moved: every angle in the report is unchanged.
-    a = analyze(FourBar(A0=[0, 0], B0=[3.5, 0], crank=1, coupler=5, rocker=4.11))
+def test_report_angles_are_absolute_and_from_the_frame_line_under_their_own_names():
+    # The same linkages, rotated by 40° and moved: the *_from_frame_deg angles and the figures
+    # are unchanged, the absolute angles turn by 40°.
     r = np.radians(40)
     b0 = [3.5 * math.cos(r) + 1, 3.5 * math.sin(r) - 2]
-    b = analyze(FourBar(A0=[1, -2], B0=b0, crank=1, coupler=5, rocker=4.11))
-    for key in ("output_range_deg", "swing_deg", "time_ratio"):
-        assert np.allclose(a[key], b[key], atol=1e-9)
-    assert b["reference_angle_deg"] == pytest.approx(40)
+    for crank, coupler, rocker in ((1, 5, 4.11), (3.5 * 3.5 / 4, 5 * 3.5 / 4, 3.5 / 4)):
+        a = analyze(FourBar(A0=[0, 0], B0=[3.5, 0], crank=crank, coupler=coupler, rocker=rocker))
+        b = analyze(FourBar(A0=[1, -2], B0=b0, crank=crank, coupler=coupler, rocker=rocker))
+        assert b["reference_angle_deg"] == pytest.approx(40)
+        for key in ("swing_deg", "time_ratio", "output_range_from_frame_deg",
+                    "input_arcs_from_frame_deg", "limit_positions_from_frame_deg"):  # fmt: skip
+            assert np.allclose(
+                np.asarray(a[key], dtype=float),
+                np.asarray(b[key], dtype=float),
+                atol=1e-9,
+                equal_nan=True,
+            ), key
+        for key in ("output_range_deg", "input_arcs_deg", "limit_positions_deg"):
+            if a[key] is None:
+                assert b[key] is None
+                continue
+            turned = (np.asarray(a[key], dtype=float) + 40 + 180) % 360 - 180
+            assert np.allclose((np.asarray(b[key]) + 180) % 360 - 180, turned, atol=1e-9), key

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from linkwright.analysis import (
@@ -234,6 +234,9 @@ def test_output_rates_match_central_differences(a1, a2, a3, a4, asm, theta):
 
 @settings(max_examples=40, deadline=None)
 @given(arc_deg, arc_deg, arc_deg, arc_deg, assembly)
+# The crank as long as the other three together: the arc is a single input to rounding, both
+# ends limits with γ = 180°, where the sampled γ is 5e-8 short of it.
+@example(15.0, 5.0, 5.0, 5.0, 1.0)
 def test_transmission_angle_law_of_cosines_and_extremes(a1, a2, a3, a4, asm):
     fb = sph(a1, a2, a3, a4, asm)
     assume(far_from_change_point(fb, 1e-2))
@@ -244,9 +247,13 @@ def test_transmission_angle_law_of_cosines_and_extremes(a1, a2, a3, a4, asm):
     c2, s2, c3, s3 = np.cos(a2 * DEG), np.sin(a2 * DEG), np.cos(a3 * DEG), np.sin(a3 * DEG)
     np.testing.assert_allclose(np.cos(gamma), (np.cos(d) - c2 * c3) / (s2 * s3), atol=1e-9)
     tx = transmission_extremes(fb)
-    # Exact extremes bound the sampled ones and are within the sampling's reach of them.
-    assert tx["min"] <= np.nanmin(gamma) + 1e-12 and np.nanmin(gamma) - tx["min"] < 2e-3
-    assert tx["max"] >= np.nanmax(gamma) - 1e-12 and tx["max"] - np.nanmax(gamma) < 2e-3
+    # Exact extremes bound the sampled ones and are within the sampling's reach of them. An
+    # extreme at a limit position (γ = 0° or 180°) is sampled from a B known there only to
+    # about √ε of its arc (the dyad's half-chord is the square root of a rounded zero), so it
+    # is bounded to 1e-7 there (5e-8 is seen on a crank as long as the other three links).
+    slack = {k: 1e-7 if float(tx[k]) in (0.0, np.pi) else 1e-12 for k in ("min", "max")}
+    assert tx["min"] <= np.nanmin(gamma) + slack["min"] and np.nanmin(gamma) - tx["min"] < 2e-3
+    assert tx["max"] >= np.nanmax(gamma) - slack["max"] and tx["max"] - np.nanmax(gamma) < 2e-3
     # Each extreme is reached where the report says.
     for key in ("min", "max"):
         m = solve(fb, [float(tx[f"{key}_at"])], order=0)

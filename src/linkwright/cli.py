@@ -382,8 +382,20 @@ def solve(
     """Joint positions at the given input angles."""
     degrees = parse_inputs(inputs) if inputs is not None else list(DEFAULT_INPUTS)
     doc = _load(file)
-    result = solve_document(doc, degrees, all_configurations=all_, derivatives=derivatives)
-    sys.stdout.write(_dump(result) if as_json else _solve_text(doc, result, derivatives))
+    from linkwright.cli_budget import solve_chunk, stream_solve
+
+    # Checked against the budget first, then computed and written a chunk of inputs at a time:
+    # memory stays bounded by the chunk, however many rows were asked for.
+    chunk = solve_chunk(doc, len(degrees), all_configurations=all_, derivatives=derivatives)
+    stream_solve(
+        degrees,
+        chunk,
+        lambda part: solve_document(doc, part, all_configurations=all_, derivatives=derivatives),
+        lambda result: _solve_text(doc, result, derivatives),
+        _jsonable,
+        sys.stdout,
+        as_json=as_json,
+    )
 
 
 def solve_document(
@@ -402,10 +414,10 @@ def solve_document(
     theta = np.radians(np.asarray(degrees, dtype=float))
     order = 2 if derivatives else 0
     if _output_driven(mech):
-        return _solve_triad(doc, degrees, theta, derivatives)
+        return _solve_triad(doc, degrees, theta, derivatives, own=not all_configurations)
     if all_configurations and not derivatives and doc.family == "spherical-stephenson3":
         # Paper 001's analysis: every configuration with its error against every constraint.
-        return _solve_triad(doc, degrees, theta, derivatives)
+        return _solve_triad(doc, degrees, theta, derivatives, own=False)
     if all_configurations:
         motions = configurations(mech, theta, order=order)
     else:
@@ -433,11 +445,12 @@ def solve_document(
 
 
 def _solve_triad(
-    doc: Document, degrees: Sequence[float], theta: Any, derivatives: bool
+    doc: Document, degrees: Sequence[float], theta: Any, derivatives: bool, *, own: bool
 ) -> dict[str, Any]:
-    """Every real configuration of a Stephenson III, each verified against every constraint:
-    all of them where its input leaves a triad (there is no assembly sign to choose one by),
-    and for ``solve --all`` on the spherical one (paper 001's configuration analysis)."""
+    """The real configurations of a Stephenson III, each verified against every constraint:
+    where its input leaves a triad, and for ``solve --all`` on the spherical one (paper 001's
+    configuration analysis). With ``own``, only the document's configuration (see
+    :data:`TRIAD_RULE`)."""
     import numpy as np
 
     from linkwright.mechanisms import solve_all
@@ -445,10 +458,13 @@ def _solve_triad(
     if derivatives:
         raise CliError(
             "--derivatives: not available yet for a linkage driven so that a triad remains "
-            f'({doc.family} with input = "{doc.mechanism.input}"); positions are'
+            f'({doc.family} with input = "{doc.mechanism.input}"); solve without it for the '
+            "positions"
         )
-    found = solve_all(doc.mechanism, theta)
-    joints = doc.mechanism.reported_joints
+    mech = doc.mechanism
+    found = solve_all(mech, theta)
+    wanted = (int(np.asarray(mech.assembly)), int(np.asarray(mech.assembly2)))
+    joints = mech.reported_joints
     samples = []
     for i, deg in enumerate(degrees):
         entries = []
@@ -463,16 +479,52 @@ def _solve_triad(
                 }
             )
         sample: dict[str, Any] = {"input_deg": float(deg), "configurations": entries}
+        if own:
+            # A sign of 0 is a configuration exactly at that dyad's limit: both branches meet.
+            same = [
+                e
+                for e in entries
+                if all(s in (0, w) for s, w in zip(e["assembly"], wanted, strict=True))
+            ]
+            sample["configurations"] = same[:1]
+            sample["matching"] = len(same)
+            if entries and not same:
+                sample["reason"] = (
+                    f"no configuration with the document's assembly ({_signs(wanted)}) at this "
+                    f"input; {len(entries)} with other signs (solve --all lists them)"
+                )
         if not entries:
             sample["reason"] = "no real configuration at this input (the triad cannot close)"
         samples.append(sample)
     count = np.asarray(found.count)
-    return {
+    result: dict[str, Any] = {
         "family": doc.family,
-        "input": doc.mechanism.input,
+        "input": mech.input,
         "max_configurations": int(count.max()) if count.size else 0,
-        "samples": samples,
     }
+    if own:
+        result["assembly"] = list(wanted)
+        result["rule"] = TRIAD_RULE[doc.family]
+    result["samples"] = samples
+    return result
+
+
+# How `solve` without --all picks the document's configuration of a triad: its two signs do not
+# single one out (the planar triad has up to 6 configurations, the spherical one 8, for 4 sign
+# pairs), so the first in the order solve_all returns them is taken, a rule that is stable
+# (the same input gives the same answer) but not a branch followed continuously.
+TRIAD_RULE = {
+    "stephenson3": (
+        "the configuration with the document's assembly and assembly2; where several share "
+        "them, the first in order of the coupler's angle (of B - A, from -180 to 180 degrees); "
+        "solve --all lists every configuration"
+    ),
+    "spherical-stephenson3": (
+        "the configuration with the document's assembly and assembly2; where several share "
+        "them, the first in order of theta1 (angle BAD, from -180 to 180 degrees); solve --all "
+        "lists every configuration"
+    ),
+}
 
 
 def _solve_text(doc: Document, result: Mapping[str, Any], derivatives: bool) -> str:
@@ -487,6 +539,8 @@ def _solve_text(doc: Document, result: Mapping[str, Any], derivatives: bool) -> 
             if (xy := _ground_xy(mech, j)) is not None
         )
         lines.append(f"# ground pivots: {pivots}")
+    if "rule" in result:
+        lines.append(f"# driven so that a triad remains; shown: {result['rule']}")
     sections = [("joints", "positions")]
     if derivatives:
         sections += [
@@ -559,6 +613,10 @@ def curve(
     if spacing not in SPACINGS:
         raise CliError(f"--spacing: must be {' or '.join(SPACINGS)}, got {spacing!r}")
     doc = _load(file)
+    from linkwright.cli_budget import check_trace
+
+    # The answer holds each sample as Python numbers, and again as text.
+    check_trace(doc.mechanism, points, knob="--points", spacing=spacing, sample_bytes=400.0)
     result = curve_document(doc, points, spacing=spacing)
     if as_json:
         sys.stdout.write(_dump(result))
@@ -566,10 +624,12 @@ def curve(
     rows = zip(result["input_deg"], result["points"], result["assembly"], strict=True)
     axes = _axes(doc.mechanism)
     if as_csv:
+        from linkwright.io.exports import number_text
+
         out = [f"input_deg,{','.join(axes)},assembly"]
         for deg, xy, asm in rows:
-            cells = [""] * len(axes) if xy is None else [repr(c) for c in xy]
-            out.append(f"{deg!r},{','.join(cells)},{asm}")
+            cells = [""] * len(axes) if xy is None else [number_text(c) for c in xy]
+            out.append(",".join([number_text(deg), *cells, number_text(asm)]))
         sys.stdout.write("\n".join(out) + "\n")
         return
     turn = "the input turns fully" if result["full_turn"] else "the input rocks between its limits"
@@ -627,7 +687,11 @@ def analyze(
     ] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Type, ranges, transmission angle, time ratio and coefficients of the mechanism."""
+    """Type, ranges, transmission angle, time ratio and coefficients of the mechanism.
+
+    Angles are absolute, as solve, curve and plot take them (the input θ counter-clockwise from
+    +x); the keys ending in _from_frame_deg measure them from the frame line, as paper 003 does.
+    A linkage that never assembles has no class (null) and says why."""
     doc = _load(file)
     try:
         from linkwright.analysis import analyze as run_analysis
@@ -711,8 +775,9 @@ def serve(
         str,
         typer.Option(
             "--host",
-            help="Address to listen on. The default serves this machine only; give 0.0.0.0 to "
-            "let other machines reach the workbench (it has no login).",
+            help="Address to listen on. The default serves this machine only; another "
+            "address (0.0.0.0: every interface) lets other machines reach the workbench, "
+            "which then asks for the token printed at start.",
         ),
     ] = "127.0.0.1",
     data_dir: Annotated[
@@ -724,34 +789,49 @@ def serve(
             "$LINKWRIGHT_DATA, else the user's data directory).",
         ),
     ] = None,
+    no_token: Annotated[
+        bool,
+        typer.Option(
+            "--no-token",
+            help="Beyond loopback, serve without a token: anyone who can reach the address, "
+            "and any web page a browser there opens, can read and change the library.",
+        ),
+    ] = False,
 ) -> None:
     """Start the browser workbench and print its address (stop it with Ctrl-C)."""
     try:
-        import uvicorn
-
         from linkwright.server import LOOPBACK_HOSTS, create_app, default_data_dir
+        from linkwright.server.runner import make_server
     except ImportError as exc:
         raise CliError(f"the workbench needs its web server packages ({exc})") from None
+    import secrets
+
     root = data_dir if data_dir is not None else default_data_dir()
+    local = _loopback(host)
+    # On loopback, only the loopback names and the address itself may reach it (no DNS
+    # rebinding from a page); beyond it, any name, but only with the token.
+    hosts = (*LOOPBACK_HOSTS, host.strip("[]").lower()) if local else None
+    token = None if local or no_token else secrets.token_urlsafe(24)
     try:
-        # On loopback, only the loopback names may reach it (no DNS rebinding from a page).
-        hosts = LOOPBACK_HOSTS if _loopback(host) else None
-        application = create_app(root, allowed_hosts=hosts)
+        application = create_app(root, allowed_hosts=hosts, token=token)
     except OSError as exc:
         raise CliError(f"--data-dir: cannot use {root}: {exc.strerror or exc}") from None
+    except ValueError as exc:  # a file in the way that is not a library
+        raise CliError(f"--data-dir: {exc}") from None
     _check_listen(host, port)
     shown = f"[{host}]" if ":" in host else host
-    if not _loopback(host):
+    if not local and no_token:
         sys.stderr.write(
-            f"warning: listening on {host}: anyone who can reach this machine can use the "
-            "workbench and its library (it has no login)\n"
+            f"warning: listening on {host} without a token: anyone who can reach this machine, "
+            "and any web page a browser there opens, can read and change the library\n"
         )
+    address = f"http://{shown}:{port}" + (f"/?token={token}" if token else "")
+    state = application.state.library.state_note()
     sys.stdout.write(
-        f"linkwright workbench on http://{shown}:{port}  (library in {root}; Ctrl-C stops it)\n"
+        f"linkwright workbench on {address}  (library in {root}{state}; Ctrl-C stops it)\n"
     )
     sys.stdout.flush()
-    config = uvicorn.Config(application, host=host, port=port, log_level="warning")
-    server = uvicorn.Server(config)
+    server = make_server(application, host, port)
     try:
         server.run()
     except (OSError, SystemExit):
@@ -864,6 +944,9 @@ def plot(
     _suffix(out, PICTURE_SUFFIXES, "pictures")
     if kind != "linkage" and at is not None:
         raise CliError("--at: only the linkage picture shows a pose; leave it out for a diagram")
+    from linkwright.cli_budget import check_drawing
+
+    check_drawing(doc.mechanism, samples, knob="--samples", least=16, order=2)
     from linkwright.plot import save_figure
     from linkwright.plot.diagrams import DiagramError, plot_diagram
     from linkwright.plot.view import PlotError, plot_mechanism
@@ -895,6 +978,9 @@ def animate(
     """Animate one cycle of the mechanism, its traced curves growing as it runs."""
     _suffix(out, (".gif", ".mp4"), "animations")
     doc = _load(file)
+    from linkwright.cli_budget import check_animation
+
+    check_animation(doc.mechanism, frames, dpi, gif=out.suffix.lower() == ".gif")
     from linkwright.plot.animation import AnimationError
     from linkwright.plot.animation import animate as render
 
@@ -929,6 +1015,9 @@ def export(
     """Export the mechanism's paths (CSV) or its drawing (SVG, DXF) for CAD."""
     _suffix(out, (".csv", ".svg", ".dxf"), "exports")
     doc = _load(file)
+    from linkwright.cli_budget import check_drawing
+
+    check_drawing(doc.mechanism, samples, knob="--samples", least=8)
     from linkwright.io.exports import ExportError
     from linkwright.io.exports import export as write
 
@@ -1255,6 +1344,9 @@ def synth_targets(
     }
     bounds = _bounds(bound or [])
     names = [n.strip() for n in free.split(",") if n.strip()]
+    from linkwright.cli_budget import check_grid
+
+    check_grid(family, grid, len(names), len(goals))
     try:
         with _Progress("searching", quiet) as progress:
             found = design_fourbar(
@@ -1485,13 +1577,15 @@ def synth_motion(
             report: Any = _design_report(design)
         elif len(rows) == 4:
             if beta2 is None:
+                from linkwright.io.exports import number_text
+
                 curves = centre_point_curve(points, angles)
                 out = ["beta2_deg,closure,centre_x,centre_y,circle_x,circle_y"]
                 for c in range(2):
                     for i in np.flatnonzero(curves.valid[c]):
                         g, m = curves.centres[c, i], curves.circles[c, i]
-                        out.append(f"{np.degrees(curves.beta2[i])!r},{c},{g[0]!r},{g[1]!r},"
-                                   f"{m[0]!r},{m[1]!r}")  # fmt: skip
+                        cells = (np.degrees(curves.beta2[i]), c, g[0], g[1], m[0], m[1])
+                        out.append(",".join(number_text(v) for v in cells))
                 sys.stdout.write("\n".join(out) + "\n")
                 return
             b = np.radians(_floats(beta2, "--beta2", 2))
@@ -1788,13 +1882,22 @@ def _atlas_summary(path: Path, manifest: Mapping[str, Any]) -> str:
 @atlas_app.command("info")
 def atlas_info(
     directory: Annotated[Path, typer.Argument(metavar="DIR", help="An atlas directory.")],
+    quick: Annotated[
+        bool,
+        typer.Option(
+            "--quick",
+            help="Check the files against the manifest by their digest files and headers only, "
+            "without re-hashing every shard (which reads the whole atlas).",
+        ),
+    ] = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """What an atlas holds: family, size, shards, index and the figures of its build."""
+    """What an atlas holds: family, size, shards, index and the figures of its build, once its
+    manifest, build.json, shards and index are checked against one another."""
     from linkwright.atlas import AtlasError, open_atlas
 
     try:
-        atlas = open_atlas(directory)
+        atlas = open_atlas(directory, hashes=not quick)
     except AtlasError as exc:
         raise CliError(str(exc)) from None
     if as_json:
@@ -1845,7 +1948,14 @@ def atlas_query(
     was drawn, with its aligned error and the transform from the atlas."""
     import numpy as np
 
-    from linkwright.atlas import AtlasError, AtlasQueryError, default_atlas, open_atlas, query
+    from linkwright.atlas import (
+        AtlasBuildError,
+        AtlasError,
+        AtlasQueryError,
+        default_atlas,
+        open_atlas,
+        query,
+    )
 
     pts = np.array(read_points(points, (2, 3)))
     try:
@@ -1857,7 +1967,7 @@ def atlas_query(
                 progress=progress,
             )  # fmt: skip
             elapsed = time.perf_counter() - t0
-    except (AtlasError, AtlasQueryError) as exc:
+    except (AtlasError, AtlasQueryError, AtlasBuildError) as exc:
         raise CliError(str(exc)) from None
     rows = []
     for rank, m in enumerate(matches, start=1):
@@ -1918,6 +2028,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     every expected failure (bad file, bad document, bad option) exits with status 2.
     """
     from linkwright.engine import NoPeriod
+    from linkwright.engine.cost import CostError
     from linkwright.io.documents import DocumentError
     from linkwright.mechanisms.sixbar import NoConstructionPlan
 
@@ -1928,7 +2039,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         status = command.main(args=args, prog_name="linkwright", standalone_mode=False)
     except click_exceptions.ClickException as exc:
         return _fail(exc.format_message())
-    except (CliError, DocumentError, NoConstructionPlan, NoPeriod) as exc:
+    except (CliError, DocumentError, NoConstructionPlan, NoPeriod, CostError) as exc:
         return _fail(str(exc))
     except typer.Abort:
         return _fail("aborted", 1)

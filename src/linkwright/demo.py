@@ -35,7 +35,7 @@ def _cell(report: dict[str, Any], key: Any) -> str:
     if value is None:
         return "—"
     if isinstance(value, list):
-        return "[" + ", ".join(f"{v:.2f}" for v in value) + "]"
+        return "[" + ", ".join("—" if v is None else f"{v:.2f}" for v in value) + "]"
     if isinstance(value, float):
         return f"{value:.4g}"
     return str(value)
@@ -117,8 +117,8 @@ def run_demo(out_dir: str | Path = "out") -> str:
         "",
         "Every bundled example analysed; pictures beside this file "
         "(`NAME-curves.png`, `NAME-diagrams.png`; animations `crank-rocker.gif` and "
-        "`paper000-fig6-crank-rocker.gif`). Angles in degrees, measured from the frame "
-        "line A0→B0 (slider: from the line's direction).",
+        "`paper000-fig6-crank-rocker.gif`). Angles in degrees; input ranges are absolute "
+        "(counter-clockwise from +x, as `linkwright solve --input` takes them).",
         "",
         header,
         rule,
@@ -134,5 +134,7 @@ def run_demo(out_dir: str | Path = "out") -> str:
         "",
     ]
     (out / "summary.md").write_text("\n".join(summary), encoding="utf-8")
-    (out / "summary.json").write_text(json.dumps(reports, indent=2) + "\n", encoding="utf-8")
+    (out / "summary.json").write_text(
+        json.dumps(reports, indent=2, allow_nan=False) + "\n", encoding="utf-8"
+    )
     return f"wrote {2 * len(names) + 2 + extra} files to {out}/ — start with {out / 'summary.md'}"

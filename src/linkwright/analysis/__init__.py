@@ -114,16 +114,22 @@ def analyze(mechanism: Mechanism, mu: float | None = None) -> dict[str, Any]:
     between which inputs it oscillates) and for a double slider its ``ellipse`` (paper 004:
     centre, semi-axes, orientation and the normalised conic A..F of eq. 3).
 
-    Angles of the input (φ1) and output (φ3) are measured from the frame line A0→B0 as in paper
-    003 (for a slider-crank: from the slider's line direction), counter-clockwise.
+    Angles are absolute, as ``solve``, ``curve`` and ``plot`` take them: the input θ is the
+    direction of A − A0 counter-clockwise from +x, the output the direction of B − B0. Paper
+    003 measures both from the frame line A0→B0 (for a slider-crank: from the slider's line
+    direction); the ``*_from_frame_deg`` keys give them so, and ``reference_angle_deg`` is the
+    frame line's own direction (absolute = from frame + reference).
 
-    Keys: ``family``, ``class``, ``grashof`` (s + l − p − q over l; four-bar), ``assembles``,
-    ``reason`` (when it does not), ``reference_angle_deg`` (the frame line's absolute direction),
-    ``input_range_deg`` (``None`` for a full turn), ``input_arcs_deg``, ``limit_positions_deg``,
-    ``output_range_deg`` and ``swing_deg`` (four-bar, ``None`` when the output turns fully),
-    ``output_range`` and ``stroke`` (slider-crank, lengths), ``transmission_angle_deg``
-    (``min``, ``max`` and the inputs where they occur), ``pressure_angle_deg`` (90° − γ),
-    ``time_ratio``, ``coefficients`` (``K_omega``, ``K_epsilon``, ``K_p``, ``delta``).
+    Keys: ``family``, ``class`` (``None`` when the linkage cannot be assembled at any input: it
+    has no motion to classify), ``assembles``, ``reason`` (when it does not), ``grashof``
+    (s + l − p − q over l; four-bar), ``reference_angle_deg``, ``input_range_deg`` (``None``
+    for a full turn), ``input_arcs_deg``, ``limit_positions_deg`` (each with its
+    ``*_from_frame_deg`` twin), ``output_range_deg`` (and ``output_range_from_frame_deg``) and
+    ``swing_deg`` (four-bar, ``None`` when the output turns fully), ``output_range`` and
+    ``stroke`` (slider-crank, lengths along the line from the foot of A0),
+    ``transmission_angle_deg`` (``min``, ``max`` and the absolute inputs where they occur),
+    ``pressure_angle_deg`` (90° − γ), ``time_ratio``, ``coefficients`` (``K_omega``,
+    ``K_epsilon``, ``K_p``, ``delta``).
 
     A spherical four-bar (paper 003's α1..α4 = crank, coupler, rocker, frame arcs; φ1 from the
     frame circle towards B0, φ3 about +OB0 from the frame circle beyond B0) gets the same keys,
@@ -146,11 +152,13 @@ def analyze(mechanism: Mechanism, mu: float | None = None) -> dict[str, Any]:
     >>> round(r["pressure_angle_deg"]["max"], 2)
     33.69
 
-    A linkage that cannot be assembled says so, and every number is null:
+    A linkage that cannot be assembled says so, has no class, and every number is null:
 
     >>> r = analyze(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3))
-    >>> r["assembles"], r["reason"], r["swing_deg"], r["coefficients"]["K_omega"]
-    (False, 'the coupler and rocker cannot reach each other at any input', None, None)
+    >>> r["class"], r["assembles"], r["swing_deg"], r["coefficients"]["K_omega"]
+    (None, False, None, None)
+    >>> r["reason"].split(": ")[1]
+    'the frame (10) is longer than the other three links together (6)'
 
     Paper 003's first spherical crank-rocker (Table 1: Kω 1.71, Kε 5.65; Table 2: μ 0.517,
     ν_n 23.73 / −11.25, ν_τ 3.18 / −3.19):
@@ -180,27 +188,24 @@ def analyze(mechanism: Mechanism, mu: float | None = None) -> dict[str, Any]:
     if is_fourbar:
         ref = float(mechanism.frame_angle)
         cls = str(fourbar_class(mechanism))
-        link_words = "the coupler and rocker cannot reach each other"
     elif isinstance(mechanism, SliderCrank):
         ref = float(mechanism.line_angle)
         cls = str(slidercrank_class(mechanism))
-        link_words = "the rod cannot reach the slider's line"
     else:
         return _report_other(mechanism)
     report: dict[str, Any] = {
         "family": mechanism.family,
-        "class": cls,
+        # A linkage that never assembles has no motion, so no motion class (Grashof's
+        # inequality alone would call frame 1, crank 1, coupler 1, rocker 5 a triple-rocker).
+        "class": None if arcs.never else cls,
         "assembles": not bool(arcs.never),
         "reference_angle_deg": _deg(ref),
     }
     if is_fourbar:
         report["grashof"] = _num(grashof(mechanism))
     if arcs.never:
-        report["reason"] = f"{link_words} at any input"
-        for key in ("input_range_deg", "output_range_deg", "swing_deg", "time_ratio"):
-            report[key] = None
-        report["input_arcs_deg"] = []
-        report["limit_positions_deg"] = []
+        report["reason"] = _never_reason(mechanism)
+        _null_ranges(report)
         report["transmission_angle_deg"] = {"min": None, "max": None}
         report["pressure_angle_deg"] = {"min": None, "max": None}
         if not is_fourbar:
@@ -209,32 +214,23 @@ def analyze(mechanism: Mechanism, mu: float | None = None) -> dict[str, Any]:
         report["coefficients"] = dict.fromkeys(("K_omega", "K_epsilon", "K_p", "delta"))
         return report
 
-    arcs_rel = [
-        [_wrap_deg(lo - ref), _num(np.degrees(hi - lo)) + _wrap_deg(lo - ref)]  # type: ignore[operator]
-        for lo, hi in zip(arcs.lo, arcs.hi, strict=True)
-        if math.isfinite(lo)
-    ]
-    report["input_range_deg"] = None if arcs.full else arcs_rel[0]
-    report["input_arcs_deg"] = [] if arcs.full else arcs_rel
-    report["limit_positions_deg"] = [a for arc in arcs_rel for a in arc]
-
+    _input_ranges(report, arcs, ref)
     ext = output_extremes(mechanism)
     if is_fourbar:
-        rocking = not bool(ext["turns"])
-        report["output_range_deg"] = [_deg(ext["min"]), _deg(ext["max"])] if rocking else None
-        report["swing_deg"] = _deg(ext["max"] - ext["min"]) if rocking else None
+        _output_ranges(report, ext, ref)
     else:
         report["output_range"] = [_num(ext["min"]), _num(ext["max"])]
         report["stroke"] = _num(ext["max"] - ext["min"])
         report["output_range_deg"] = None
+        report["output_range_from_frame_deg"] = None
         report["swing_deg"] = None
 
     tx = transmission_extremes(mechanism)
     report["transmission_angle_deg"] = {
         "min": _deg(tx["min"]),
         "max": _deg(tx["max"]),
-        "min_at_input_deg": _wrap_deg(tx["min_at"] - ref),
-        "max_at_input_deg": _wrap_deg(tx["max_at"] - ref),
+        "min_at_input_deg": _wrap_deg(tx["min_at"]),
+        "max_at_input_deg": _wrap_deg(tx["max_at"]),
     }
     report["pressure_angle_deg"] = {
         "min": _num(90.0 - np.degrees(tx["max"])),
@@ -246,14 +242,79 @@ def analyze(mechanism: Mechanism, mu: float | None = None) -> dict[str, Any]:
     return report
 
 
-def _limits_deg(arcs: Any) -> tuple[list[list[float | None]], list[float | None]]:
-    """Input arcs (φ1 in degrees, each start wrapped to (−180, 180]) and their ends."""
-    rel = [
-        [_wrap_deg(lo), _num(np.degrees(hi - lo)) + _wrap_deg(lo)]  # type: ignore[operator]
+def _limits_deg(arcs: Any, ref: float = 0.0) -> list[list[float | None]]:
+    """Input arcs in degrees measured from the direction ``ref`` (radians), each start wrapped
+    to (−180, 180] and its end the start plus the arc's width."""
+    return [
+        [_wrap_deg(lo - ref), _num(np.degrees(hi - lo)) + _wrap_deg(lo - ref)]  # type: ignore[operator]
         for lo, hi in zip(arcs.lo, arcs.hi, strict=True)
         if math.isfinite(lo)
     ]
-    return rel, [a for arc in rel for a in arc]
+
+
+def _null_ranges(report: dict[str, Any]) -> None:
+    """The range keys of a linkage that never assembles: no arcs, no limits, no extremes."""
+    for suffix in ("_deg", "_from_frame_deg"):
+        report["input_range" + suffix] = None
+        report["input_arcs" + suffix] = []
+        report["limit_positions" + suffix] = []
+    report["output_range_deg"] = report["output_range_from_frame_deg"] = None
+    report["swing_deg"] = None
+    report["time_ratio"] = None
+
+
+def _input_ranges(report: dict[str, Any], arcs: Any, ref: float) -> None:
+    """The input's arcs and limit positions, absolute (what ``solve --input`` takes) and from
+    the frame line (paper 003's φ1)."""
+    for suffix, origin in (("_deg", 0.0), ("_from_frame_deg", ref)):
+        found = _limits_deg(arcs, origin)
+        report["input_range" + suffix] = None if arcs.full else found[0]
+        report["input_arcs" + suffix] = [] if arcs.full else found
+        report["limit_positions" + suffix] = [a for arc in found for a in arc]
+
+
+def _output_ranges(report: dict[str, Any], ext: dict[str, Any], ref: float) -> None:
+    """A four-bar output's range: absolute (the direction of B − B0) and from the frame line
+    (paper 003's φ3), each start wrapped to (−180, 180]; ``None`` where the output turns."""
+    if bool(ext["turns"]):
+        report["output_range_deg"] = report["output_range_from_frame_deg"] = None
+        report["swing_deg"] = None
+        return
+    swing = _deg(ext["max"] - ext["min"])
+    start = _wrap_deg(ext["min"] + ref)
+    report["output_range_deg"] = [start, _num(start + swing)]  # type: ignore[operator]
+    report["output_range_from_frame_deg"] = [_deg(ext["min"]), _deg(ext["max"])]
+    report["swing_deg"] = swing
+
+
+def _never_reason(mechanism: Mechanism) -> str:
+    """Why a four-bar (planar or spherical) or slider-crank cannot be assembled at any input."""
+    if isinstance(mechanism, SliderCrank):
+        return "the rod cannot reach the slider's line at any input"
+    head = "the coupler and rocker cannot reach each other at any input"
+    if isinstance(mechanism, SphericalFourBar):
+        unit = "°"
+        frame = float(np.degrees(mechanism.frame))
+        crank, coupler, rocker = (
+            float(np.degrees(getattr(mechanism, k))) for k in ("crank", "coupler", "rocker")
+        )
+    else:
+        unit = ""
+        frame = float(np.hypot(*(np.asarray(mechanism.B0) - np.asarray(mechanism.A0))))
+        crank, coupler, rocker = (
+            float(getattr(mechanism, k)) for k in ("crank", "coupler", "rocker")
+        )
+    links = {"frame": frame, "crank": crank, "coupler": coupler, "rocker": rocker}
+    name = max(links, key=links.__getitem__)
+    rest = sum(links.values()) - links[name]
+    if links[name] > rest:
+        # A side of a closed loop is never longer than the other sides together (in the plane,
+        # and on the sphere, whose arcs obey the triangle inequality too).
+        return (
+            f"{head}: the {name} ({links[name]:.6g}{unit}) is longer than the other three "
+            f"links together ({rest:.6g}{unit})"
+        )
+    return head
 
 
 def _report_spherical(fb: SphericalFourBar, mu: float | None) -> dict[str, Any]:
@@ -261,9 +322,10 @@ def _report_spherical(fb: SphericalFourBar, mu: float | None) -> dict[str, Any]:
     arcs = sph.input_limits(fb)
     report: dict[str, Any] = {
         "family": fb.family,
-        "class": str(sph.spherical_class(fb)),
+        "class": None if arcs.never else str(sph.spherical_class(fb)),
         "grashof_terms_deg": [_deg(f) for f in sph.grashof_terms(fb)],
         "assembles": not bool(arcs.never),
+        # The document's θ is already φ1, from the frame circle: absolute and from the frame agree.
         "reference_angle_deg": 0.0,
     }
     if mu is None:
@@ -280,22 +342,17 @@ def _report_spherical(fb: SphericalFourBar, mu: float | None) -> dict[str, Any]:
         "mu_source": source,
     }
     if arcs.never:
-        report["reason"] = "the coupler and rocker cannot reach each other at any input"
-        for key in ("input_range_deg", "output_range_deg", "swing_deg", "time_ratio"):
-            report[key] = None
-        report["input_arcs_deg"] = []
-        report["limit_positions_deg"] = []
+        report["reason"] = _never_reason(fb)
+        _null_ranges(report)
         report["transmission_angle_deg"] = dict(empty)
         report["pressure_angle_deg"] = pressure
         report["coefficients"] = dict.fromkeys(("K_omega", "K_epsilon", "K_p", "delta"))
         return report
-    rel, ends = _limits_deg(arcs)
-    report["input_range_deg"] = None if arcs.full else rel[0]
-    report["input_arcs_deg"] = [] if arcs.full else rel
-    report["limit_positions_deg"] = ends
+    _input_ranges(report, arcs, 0.0)
     ext = sph.output_extremes(fb)
     rocking = not bool(ext["turns"])
     report["output_range_deg"] = [_deg(ext["min"]), _deg(ext["max"])] if rocking else None
+    report["output_range_from_frame_deg"] = report["output_range_deg"]
     report["swing_deg"] = _deg(ext["max"] - ext["min"]) if rocking else None
     tx = sph.transmission_extremes(fb)
     report["transmission_angle_deg"] = {

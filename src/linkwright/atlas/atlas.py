@@ -12,7 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.atlas import store
-from linkwright.atlas.build import BuildSpec, build
+from linkwright.atlas.build import AtlasBuildError, BuildSpec, build
 from linkwright.atlas.families import FAMILIES, PARAMS
 from linkwright.atlas.index import Index
 
@@ -65,29 +65,43 @@ class Atlas:
         return np.ascontiguousarray(np.concatenate(parts), dtype=np.float32)
 
 
-def open_atlas(path: str | os.PathLike[str]) -> Atlas:
+def open_atlas(path: str | os.PathLike[str], *, hashes: bool = False) -> Atlas:
     """Open the finished atlas in directory ``path`` and load its index.
+
+    The manifest, build.json and the shards on disk are checked against one another first
+    (:func:`linkwright.atlas.store.verify`; ``hashes`` re-hashes every file, reading the whole
+    atlas), so a directory two builds wrote into, or one with a file swapped, is refused.
 
     Raises
     ------
     AtlasError
-        If ``path`` holds no atlas, or an unfinished build (run the build again to finish it).
+        If ``path`` holds no atlas, an unfinished build (run the build again to finish it), a
+        build in progress, or files that do not belong together (names the first mismatch).
     """
     root = Path(path)
     if not root.is_dir():
         raise AtlasError(f"{root}: no such atlas directory")
     if not (root / store.MANIFEST).exists():
+        holder = store.lock_holder(root)
+        if holder is not None:
+            raise AtlasError(f"{root}: an atlas build (pid {holder}) is writing it now")
         if (root / store.BUILD).exists():
             raise AtlasError(
                 f"{root}: the build is unfinished; run `linkwright atlas build` with the same "
                 "options again to resume it"
             )
         raise AtlasError(f"{root}: not an atlas (no {store.MANIFEST})")
-    manifest = store.read_json(root / store.MANIFEST)
-    spec = manifest.get("spec", {})
-    if spec.get("family") not in FAMILIES or spec.get("format") != 1:
-        raise AtlasError(f"{root}: an atlas of an unknown family or format ({spec})")
-    kind, nprobe = manifest["index"]["kind"], int(manifest["index"]["nprobe"])
+    try:
+        manifest = store.read_json(root / store.MANIFEST)
+        spec = manifest.get("spec", {})
+        if spec.get("family") not in FAMILIES or spec.get("format") != 1:
+            raise AtlasError(f"{root}: an atlas of an unknown family or format ({spec})")
+        store.verify(root, manifest, hashes=hashes)
+        kind, nprobe = manifest["index"]["kind"], int(manifest["index"]["nprobe"])
+    except store.AtlasStoreError as exc:
+        raise AtlasError(str(exc)) from None
+    except (KeyError, TypeError, AttributeError) as exc:
+        raise AtlasError(f"{root}: {store.MANIFEST} is not an atlas manifest ({exc!r})") from None
     try:
         index = Index.load(root / store.INDEX, kind, nprobe, None)
     except ImportError:
@@ -114,6 +128,16 @@ def default_atlas(
         raise AtlasError(f"family: must be one of {', '.join(FAMILIES)}, got {family!r}")
     count = DEFAULT_COUNTS[family]
     root = data_dir() / "atlas" / f"{family}-{count}-seed0-v1"
-    if not (root / store.MANIFEST).exists():
-        build(family, count, root, workers=0, progress=progress)
+    for _ in range(3):
+        if (root / store.MANIFEST).exists():
+            break
+        try:
+            build(family, count, root, workers=0, progress=progress)
+        except AtlasBuildError:
+            if store.lock_holder(root) is None:
+                raise
+            # Another process (a second query, the workbench) is building this very atlas:
+            # wait for it rather than fail, then use what it built.
+            with store.build_lock(root, wait=True):
+                pass
     return open_atlas(root)

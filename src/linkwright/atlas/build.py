@@ -34,6 +34,7 @@ from linkwright.atlas.families import (
     sample,
 )
 from linkwright.atlas.index import Index
+from linkwright.engine import cost
 
 __all__ = [
     "DEFAULT_SHARD_SIZE",
@@ -219,16 +220,41 @@ def build(
     Raises
     ------
     AtlasBuildError
-        For a bad spec, or an ``out`` that holds a different atlas.
+        For a bad spec, one over the budgets of :func:`linkwright.engine.cost.check_atlas`
+        (entries, samples, entries × samples, a shard's memory), or an ``out`` that holds a
+        different atlas.
     """
     try:
         spec = BuildSpec(family, count, seed, shard_size, samples, harmonics)
     except AtlasFamilyError as exc:
         raise AtlasBuildError(str(exc)) from None
+    try:
+        # Bounded here, not in BuildSpec: an atlas built before a budget changed still opens.
+        cost.check_atlas(spec.count, spec.samples, spec.shard_size)
+    except cost.CostError as exc:
+        raise AtlasBuildError(str(exc)) from None
     root = Path(out)
     if root.exists() and not root.is_dir():
         raise AtlasBuildError(f"--out: {root} exists and is not a directory")
     root.mkdir(parents=True, exist_ok=True)
+    # Held from before the first look at the directory to after the last file: a second build
+    # into it is refused at once, and never clears this one's temporary files or mixes shards.
+    try:
+        with store.build_lock(root):
+            return _build_locked(spec, root, workers, scheduler, progress)
+    except store.AtlasLocked as exc:
+        raise AtlasBuildError(f"--out: {exc}") from None
+
+
+def _build_locked(
+    spec: BuildSpec,
+    root: Path,
+    workers: int | None,
+    scheduler: str | None,
+    progress: Callable[[float], None] | None,
+) -> dict[str, Any]:
+    """:func:`build`'s work, done while holding the directory's build lock."""
+    family = spec.family
     store.clear_partial(root)
     previous = root / store.BUILD
     if previous.exists():
@@ -292,6 +318,8 @@ def build(
             "storage": index.storage,
             "recall_at_10": recall,
             "tuning_queries": TUNING_QUERIES,
+            # What `atlas info` and `query` check the index file against.
+            **_index_file(root / store.INDEX),
         },
         "build": {
             "seconds_shards": round(t_shards, 3),
@@ -304,6 +332,13 @@ def build(
     }
     store.write_json(root / store.MANIFEST, manifest)
     return manifest
+
+
+def _index_file(path: Path) -> dict[str, Any]:
+    """The index file's SHA-256 and size, or nothing where the search is exact (no file)."""
+    if not path.exists():
+        return {}
+    return {"sha256": store.file_digest(path), "bytes": path.stat().st_size}
 
 
 def _describe(spec: dict[str, Any]) -> str:

@@ -11,7 +11,9 @@ placed where the query was drawn, optionally refined.
 4. With ``refine``, the best few are optimised locally (:func:`linkwright.synthesis.fit_path`
    started from them within tight bounds, no timing, closed curve) until the RMS distance from
    the query's points to the curve is within ``tolerance`` of the query's size, or the budget
-   runs out; a refinement is kept only where it is better.
+   runs out; a refinement is kept only where it is better. It fits at most
+   :data:`REFINE_POINTS` of the points, evenly spaced along the query (its cost grows faster
+   than their count); the distance that decides is measured to all of them.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from scipy.spatial import cKDTree
 from linkwright.atlas.atlas import Atlas
 from linkwright.atlas.families import curves, describe_variants
 from linkwright.curves import align, sphere_align
+from linkwright.engine import cost
 from linkwright.mechanisms import Mechanism, solve
 from linkwright.synthesis.path_families import MODELS, rodrigues, sphere_rotation
 
@@ -37,8 +40,10 @@ Array = NDArray[np.float64]
 
 RANK_SAMPLES = 256
 REFINED = 3
-DISTANCE_SAMPLES = 1024
 """How many of the best matches ``refine`` optimises."""
+DISTANCE_SAMPLES = 1024
+REFINE_POINTS = int(cost.REFINE_POINTS.value)
+"""Most query points a refinement fits (:data:`linkwright.engine.cost.REFINE_POINTS`)."""
 
 
 class AtlasQueryError(ValueError):
@@ -264,8 +269,10 @@ def query(
             progress(0.2 * (rank + 1) / len(order) if refine else (rank + 1) / len(order))
     if refine:
         chosen = matches[:REFINED]
+        fitted = thinned(q, REFINE_POINTS)
         for i, m in enumerate(chosen):
-            better = _refine(family, q, m, size, tolerance, budget)
+            cost.check_time()
+            better = _refine(family, fitted, m, size, tolerance, budget, q)
             if better is not None:
                 matches[i] = better
             if progress:
@@ -305,14 +312,33 @@ def _size(space: str, q: Array) -> float:
     return float(np.sqrt(np.mean(np.sum((q - c) ** 2, axis=1))))
 
 
+def thinned(points: Array, most: int) -> Array:
+    """At most ``most`` of ``points``, evenly spaced along them (the first and last kept).
+
+    >>> thinned(np.arange(10.0)[:, None], 4).ravel()
+    array([0., 3., 6., 9.])
+    """
+    if len(points) <= most:
+        return points
+    return points[np.linspace(0, len(points) - 1, most).round().astype(int)]
+
+
 def _refine(
-    family: str, q: Array, m: Match, size: float, tolerance: float, budget: float
+    family: str,
+    q: Array,
+    m: Match,
+    size: float,
+    tolerance: float,
+    budget: float,
+    everything: Array | None = None,
 ) -> Match | None:
-    """Least squares from the match: its parameters and one input per query point together,
-    residuals P(θ_i) − q_i, so the optimum puts each θ_i at its point's foot on the curve and
-    minimises the RMS distance from the points to the curve. Lengths move as logarithms (they
-    stay positive), arcs within (0, π); the sphere's pose as a small rotation after the
-    match's."""
+    """Least squares from the match: its parameters and one input per fitted point ``q``
+    together, residuals P(θ_i) − q_i, so the optimum puts each θ_i at its point's foot on the
+    curve and minimises the RMS distance from the points to the curve. Lengths move as
+    logarithms (they stay positive), arcs within (0, π); the sphere's pose as a small rotation
+    after the match's. Whether it is better is judged by the distance to ``everything`` (all
+    the query's points; default ``q``)."""
+    everything = q if everything is None else everything
     model = MODELS[family]
     p0 = dict(m.params)
     sphere = model.space == "sphere"
@@ -373,6 +399,7 @@ def _refine(
     z, best = z0, float(np.sqrt(np.mean(residuals(z0).reshape(n_pts, -1) ** 2) * q.shape[1]))
     bounds = (np.r_[lo, np.full(n_pts, -np.inf)], np.r_[hi, np.full(n_pts, np.inf)])
     while best > goal and time.perf_counter() - start < budget:
+        cost.check_time()
         sol = least_squares(
             residuals, z, jac_sparsity=sparsity, bounds=bounds, method="trf", max_nfev=60,
             x_scale="jac",
@@ -387,10 +414,10 @@ def _refine(
     traced = _traced(user, DISTANCE_SAMPLES)
     if not np.all(np.isfinite(traced)):
         return None  # refined past a limit position: the input no longer turns fully
-    distance = _distance(q, traced)
+    distance = _distance(everything, traced)
     if not distance < m.distance:
         return None
-    again = _aligned(model.space, _traced(user, RANK_SAMPLES)[None], q)
+    again = _aligned(model.space, _traced(user, RANK_SAMPLES)[None], everything)
     named = model.placed(
         {k: params_of(z[:n_par])[k] for k in model.shape_names}, p0["assembly"],
         (0.0, 0.0, 0.0) if not sphere else np.eye(3),

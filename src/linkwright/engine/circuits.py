@@ -25,6 +25,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from linkwright.engine import crossings
+from linkwright.engine.crossings import LIMIT, PLAIN
 from linkwright.engine.evaluate import Motion, batch_shape, evaluate, place_all
 from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, SphereCrank
 from linkwright.geometry import plane
@@ -162,6 +164,9 @@ def _analytic_arcs(plan: Plan, params, points) -> InputArcs:
         # Pivots that coincide at every input (equal cranks on one pivot, in phase) leave the
         # dyad undefined everywhere: it never assembles, whatever the thresholds.
         const_ok = const_ok & (c0 > 0.0)
+    # Where q is flat the half-angle ratios divide by amp = 0 (±inf, or NaN for 0/0) and mean
+    # nothing: the flat test decides there, and adding +inf to −inf would warn.
+    s_hi, c_lo = np.where(flat, 0.0, s_hi), np.where(flat, 0.0, c_lo)
     never = np.where(flat, ~const_ok, (s_hi > 1.0) | (c_lo > 1.0) | (s_hi + c_lo > 1.0))
     full = np.where(flat, const_ok, (s_hi <= 0.0) & (c_lo <= 0.0))
     a_in = 2.0 * np.arcsin(np.sqrt(np.clip(s_hi, 0.0, 1.0)))  # |θ − ψ| ≥ a_in
@@ -274,8 +279,12 @@ def _assembled(plan, params, points, theta, branches) -> tuple[NDArray[np.bool_]
         # The strict sign of the discriminant, not the rounding-tolerant `valid`: bisection must
         # converge on the root itself.
         closes = st.valid & (st.margin >= 0.0)
+        # Parents that meet with links allowing it (a crossing): closed, far from a limit.
+        meet = crossings.meets(dyad, states, params)
+        closes = closes | meet
         ok = closes if ok is None else ok & closes
-        margins.append(np.where(np.isfinite(st.margin), np.abs(st.margin), np.inf))
+        margin = np.where(np.isfinite(st.margin), np.abs(st.margin), np.inf)
+        margins.append(np.where(meet, 1.0, margin))
     return ok, np.stack(margins, axis=-1)
 
 
@@ -457,7 +466,10 @@ def input_arcs(
         raise ValueError("this plan's limits have no closed form; use method='numeric'")
     if method == "analytic" or (method == "auto" and analytic_ok):
         return _analytic_arcs(plan, params, points)
-    return _numeric_arcs(plan, params, points, None, turns=turns)
+    arcs = _numeric_arcs(plan, params, points, None, turns=turns)
+    if len(dyads) > 1:  # a later dyad may fail past a crossing of an earlier one's sign
+        arcs = crossings.merge_arcs(plan, params, points, arcs, GRID * int(turns.max()))
+    return arcs
 
 
 MAX_SEGMENTS = 32
@@ -484,8 +496,14 @@ def trace(
     each time a dyad reaches its limit position the input reverses and that dyad changes
     branch (its two branches meet there, so nothing jumps), until the linkage is back where it
     started. A single-dyad linkage sweeps its arc up and back; a six-bar may pass several limits
-    of different dyads. Each stretch between two limits (a *segment*) starts with its limit, an
-    exact sample. A linkage with no such arc comes back with ``valid`` all False.
+    of different dyads. Where a dyad's parents meet (:mod:`~linkwright.engine.crossings`: an
+    exact kite or deltoid with A passing through B0; on the sphere A through ±B0) the dyad
+    changes branch too, but the input runs on: the joint keeps to its analytic branch, whose
+    sign flips there. An exact deltoid so comes back after one turn on its other branch, and
+    its circuit takes two. Each stretch between two limits or crossings (a *segment*) starts
+    with its limit or crossing, an exact sample; on a crossing the joint, undetermined by the
+    dyad alone, is placed as the limit of its neighbours. A linkage with no such arc comes back
+    with ``valid`` all False.
 
     Parameters
     ----------
@@ -513,8 +531,9 @@ def trace(
 
             2·M·L_j/n + 2ν        (n ≥ 8S),
 
-        S the number of segments (1 for a full turn, 2 for one dyad's arc), ν = 1e-7 of the
-        linkage's size (near a limit a dyad's joint is known to about √ε of its link). The
+        S the number of segments (1 for a full turn, 2 for one dyad's arc, one more for each
+        crossing passed: 4 for an exact kite), ν = 1e-7 of the linkage's size (near a limit a
+        dyad's joint is known to about √ε of its link). The
         samples lie at most M/(n − S) of measure apart, and the grid they are interpolated on
         has cells of at most M/(4n), so c ≤ n/(n − S) + 2/4 ≤ 1.65 < 2. Measured on 12,000
         circuits of random near-singular four-bars, slider-cranks and spherical four-bars (the
@@ -527,13 +546,12 @@ def trace(
         ε·|A|·(link)/|A − B0| and more, which adds to the step. The cost is about five
         evaluations per sample instead of one.
 
-        Where the motion itself is discontinuous (an exact singular pose: a deltoid or rhombus
-        with A passing through B0, where the dyad is undefined and its joint leaves on the other
-        side), no bisection shrinks the step. An interval that does not shrink to within a few
-        ulps of input, and still moves a joint by more than two mean steps, weighs nothing: no
-        samples are spent on it, and the step across it is the jump plus at most a regular step
-        on either side. A sample exactly on the singular input is unassembled (NaN), as with
-        ``"input"``.
+        Where the positions themselves jump (a dyad whose parents miss each other by more
+        than a crossing's rounding but too little for the input's last bits to resolve the
+        swing, some 1e-15 to 1e-13 of the linkage's size), no bisection shrinks the step. An
+        interval that does not shrink to within a few ulps of input, and still moves a joint
+        by more than two mean steps, weighs nothing: no samples are spent on it, and the step
+        across it is the jump plus at most a regular step on either side.
 
     Returns
     -------
@@ -604,12 +622,23 @@ def trace(
         seg_end = np.stack((np.where(arcs.full, start + period, hi), lo), -1)
         seg_end[..., 1] = np.where(arcs.full, np.nan, seg_end[..., 1])
         seg_branches = {k: np.stack((v, -v), -1) for k, v in doc.items()}
+        ends = np.broadcast_to(np.where(arcs.full, PLAIN, LIMIT)[..., None], shape + (2,)).copy()
+        segs = (seg_start, seg_end, seg_branches, ends, ends.copy())
+        analytic = (
+            plan.space == "plane"
+            and all(_turns_with_input(plan, p, params) for d in dyads for p in d.parents)
+            and np.all(np.rint(period / TWO_PI) == 1)
+        )
+        segs = crossings.cut_single(
+            plan, params, points, segs, arcs, usable, doc, GRID, _turning if analytic else None
+        )
         weight = None
     else:
         theta0 = np.where(arcs.full, start, np.where(have_arc, lo, 0.0))
-        seg_start, seg_end, seg_branches = _walk(plan, params, points, theta0, doc, period, usable)
+        first = np.where(arcs.full, PLAIN, LIMIT)
+        segs = _walk(plan, params, points, theta0, doc, period, usable, first=first)
         for finer in REFINE_GRIDS:
-            failed = usable & ~np.isfinite(seg_start[..., 0])
+            failed = usable & ~np.isfinite(segs[0][..., 0])
             if not failed.any():
                 break
             # A limit gap narrower than a scan cell was stepped over and the walk wandered into
@@ -624,25 +653,37 @@ def trace(
                 period[failed],
                 np.ones(int(failed.sum()), bool),
                 grid=finer,
+                first=first[failed],
             )
-            seg_start, seg_end, seg_branches = _scatter(
-                (seg_start, seg_end, seg_branches), again, failed
-            )
-        weight = _path_lengths(plan, params, points, seg_start, seg_end, seg_branches)
+            segs = crossings.scatter(segs, again, failed)
+        weight = _path_lengths(plan, params, points, *segs)
+    seg_start, seg_end, seg_branches, begin, end = segs
     seg_start = np.where(usable[..., None], seg_start, np.nan)
-    # A circuit between limits has at least two segments (up, then back); a full turn has one.
-    limited = np.isfinite(seg_start[..., 1]) if seg_start.shape[-1] > 1 else np.zeros(shape, bool)
+    # Next to a limit position the input is spaced as sin², not next to a crossing.
+    code = crossings.warp_codes(begin, end)
     if spacing == "path":
         theta, segment = _path_samples(
-            plan, params, points, seg_start, seg_end, seg_branches, samples, limited
+            plan, params, points, seg_start, seg_end, seg_branches, samples, code, begin, end
         )
     else:
-        theta, segment = _sample_segments(seg_start, seg_end, samples, limited, weight)
+        theta, segment = _sample_segments(seg_start, seg_end, samples, code, weight)
     branches = {
         k: np.take_along_axis(np.nan_to_num(v, nan=1.0), segment, -1)
         for k, v in seg_branches.items()
     }
-    motion = evaluate(plan, params, theta, points=points, branches=branches or None, order=order)
+    on = crossings.flags(
+        plan,
+        begin,
+        end,
+        seg_start,
+        seg_end,
+        segment,
+        theta == np.take_along_axis(seg_start, segment, -1),
+        theta == np.take_along_axis(seg_end, segment, -1),
+    )
+    motion = evaluate(
+        plan, params, theta, points=points, branches=branches or None, order=order, crossings=on
+    )
     keep = np.isfinite(theta)
     if keep.all():
         return motion
@@ -653,16 +694,17 @@ def _sample_segments(
     seg_start: Array,
     seg_end: Array,
     samples: int,
-    limited: NDArray[np.bool_],
+    code: NDArray[np.int64],
     weight: Array | None = None,
 ) -> tuple[Array, NDArray]:
     """Spread ``samples`` inputs over each linkage's segments, in proportion to their lengths.
 
-    Every segment gets its start (a limit position) as a sample, and the rest are shared by
-    largest remainder, ties to the earlier segment, so a sweep up and back down an arc puts
-    ``ceil(samples/2)`` samples on the way up. ``limited`` marks linkages whose segments run
-    between limit positions; ``weight`` (default: the input's travel) is what the samples are
-    shared in proportion to. Linkages without segments get NaN inputs.
+    Every segment gets its start (a limit position, or a crossing) as a sample, and the rest are
+    shared by largest remainder, ties to the earlier segment, so a sweep up and back down an arc
+    puts ``ceil(samples/2)`` samples on the way up. ``code`` says which ends of each segment
+    are limit positions (:func:`~linkwright.engine.crossings.warp`); ``weight`` (default: the
+    input's travel) is what the samples are shared in proportion to. Linkages without segments
+    get NaN inputs.
     """
     length = np.abs(seg_end - seg_start) if weight is None else weight
     seg, first, n, total = _share(length, seg_start, samples)
@@ -675,7 +717,7 @@ def _sample_segments(
         # the nearer limit, so even steps of the input would crowd the middle of the curve and
         # leave long chords at its ends. sin²(πf/2) spaces the input quadratically at both ends,
         # which makes the steps along the curve even there. A full turn has no limits: even steps.
-        frac = np.where(limited[..., None], np.sin(0.5 * np.pi * frac) ** 2, frac)
+        frac = crossings.warp(np.take_along_axis(code, seg, -1), frac)
     theta = a + (b - a) * frac
     theta = np.where(total > 0, theta, np.nan)
     return theta, seg
@@ -721,7 +763,7 @@ def _share(
 PILOT = 17
 
 
-def _path_lengths(plan, params, points, seg_start, seg_end, seg_branches) -> Array:
+def _path_lengths(plan, params, points, seg_start, seg_end, seg_branches, begin, end) -> Array:
     """How far the joints travel along each segment, from a few samples of each.
 
     A segment short in the input can be long on the curve (two limits close together, with the
@@ -731,13 +773,16 @@ def _path_lengths(plan, params, points, seg_start, seg_end, seg_branches) -> Arr
     """
     f = np.sin(0.5 * np.pi * np.linspace(0.0, 1.0, PILOT)) ** 2
     a, b = seg_start[..., None], seg_end[..., None]
-    theta = np.where(np.isfinite(a), a + (b - a) * f, 0.0)
+    theta = np.where(np.isfinite(a), np.where(f == 1.0, b, a + (b - a) * f), 0.0)
     shape = seg_start.shape
     flat = theta.reshape(shape[:-1] + (-1,))
     branches = {
         k: np.repeat(np.nan_to_num(v, nan=1.0), PILOT, axis=-1) for k, v in seg_branches.items()
     }
-    motion = evaluate(plan, params, flat, points=points, branches=branches, order=0)
+    segment = np.broadcast_to(np.repeat(np.arange(shape[-1]), PILOT), flat.shape)
+    ends = np.broadcast_to(np.tile(f, shape[-1]), flat.shape)
+    on = crossings.flags(plan, begin, end, seg_start, seg_end, segment, ends == 0.0, ends == 1.0)
+    motion = evaluate(plan, params, flat, points=points, branches=branches, order=0, crossings=on)
     travel = np.zeros(shape)
     for pos in motion.positions.values():
         p = pos.reshape(shape + (PILOT, pos.shape[-1]))
@@ -765,11 +810,15 @@ NOISE = 1e-7
 JUMP = 2.0
 
 
-def _path_samples(plan, params, points, seg_start, seg_end, seg_branches, samples, limited):
+def _path_samples(
+    plan, params, points, seg_start, seg_end, seg_branches, samples, code, begin, end
+):
     """Inputs that advance every moving joint in even steps along its own path.
 
-    Each segment is parametrised by f ∈ [0, 1] as ``a + (b − a)·g(f)``, g the sin² warp between
-    limits (where the joints then move about linearly in f) and the identity on a full turn. A
+    Each segment is parametrised by f ∈ [0, 1] as ``a + (b − a)·g(f)``, g the sin² warp next to
+    limits (where the joints then move about linearly in f; ``code``, see
+    :func:`~linkwright.engine.crossings.warp`) and the identity elsewhere. Ends at a crossing
+    (``begin``/``end``) are placed as their limits. A
     pilot grid of ``max(PATH_PILOT, samples)`` intervals per segment is bisected, level by level
     and for the whole batch in one evaluation per level, until no interval's *measure* exceeds
     ``PATH_STEP`` of the mean step M/n. The measure of an interval is the largest, over the
@@ -789,7 +838,8 @@ def _path_samples(plan, params, points, seg_start, seg_end, seg_branches, sample
     size = int(np.prod(shape, dtype=np.int64))
     a = seg_start.reshape(size, s)
     b = seg_end.reshape(size, s)
-    lim = np.broadcast_to(limited, shape).reshape(size)
+    warps = np.broadcast_to(code, shape + (s,)).reshape(size, s)
+    ends = (begin.reshape(size, s), end.reshape(size, s))
     br = {k: np.nan_to_num(v, nan=1.0).reshape(size, s) for k, v in seg_branches.items()}
     joints = [step.name for step in plan.steps if not isinstance(step, Fixed)]
     theta = np.full((size, samples), np.nan)
@@ -806,35 +856,42 @@ def _path_samples(plan, params, points, seg_start, seg_end, seg_branches, sample
             a[rows],
             b[rows],
             {k: v[rows] for k, v in br.items()},
-            lim[rows],
+            warps[rows],
             samples,
+            (ends[0][rows], ends[1][rows]),
         )
     return theta.reshape(shape + (samples,)), seg.reshape(shape + (samples,))
 
 
-def _take(params, points, shape, rows):
-    """The parameters of the linkages ``rows`` (indices into the flattened batch)."""
-    out = {}
-    for key, value in params.items():
-        a = np.asarray(value, dtype=float)
-        tail = a.shape[-1:] if key in points else ()
-        out[key] = np.broadcast_to(a, shape + tail).reshape((-1,) + tail)[rows]
-    return out
+_take = crossings.take_rows
 
 
-def _path_chunk(plan, params, points, joints, a, b, br, lim, samples):
+def _path_chunk(plan, params, points, joints, a, b, br, warps, samples, ends):
     """:func:`_path_samples` for a flat batch ``(m,)`` with segments ``(m, S)``."""
     m, s = a.shape
-    af, bf, warp = a.ravel(), b.ravel(), np.repeat(lim, s)
+    af, bf, warp = a.ravel(), b.ravel(), warps.ravel()
+    begin, end = (e.ravel() for e in ends)
     flat_br = {k: v.ravel() for k, v in br.items()}
 
     def inputs(o, x):
-        g = np.where(warp[o], np.sin(0.5 * np.pi * x) ** 2, x)
-        return af[o] + (bf[o] - af[o]) * g
+        g = crossings.warp(warp[o], x)
+        # A segment's far end exactly (a crossing placed there is the limit at that input).
+        return np.where(x == 1.0, bf[o], af[o] + (bf[o] - af[o]) * g)
 
     def place(o, x):
         # One evaluation for every node asked for, each node a linkage of its own.
         rows = o // s
+        one = np.zeros((o.size, 1), dtype=np.int64)
+        on = crossings.flags(
+            plan,
+            begin[o][:, None],
+            end[o][:, None],
+            af[o][:, None],
+            bf[o][:, None],
+            one,
+            (x == 0.0)[:, None],
+            (x == 1.0)[:, None],
+        )
         motion = evaluate(
             plan,
             {k: v[rows] for k, v in params.items()},
@@ -842,6 +899,7 @@ def _path_chunk(plan, params, points, joints, a, b, br, lim, samples):
             points=points,
             branches={k: v[o][:, None] for k, v in flat_br.items()} or None,
             order=0,
+            crossings=on,
         )
         return {k: v[:, 0] for k, v in motion.positions.items()}
 
@@ -975,8 +1033,12 @@ def _splits(own, pos, stuck, m, s, size, samples):
     good = open_ & np.isfinite(measure)
     row = own[:-1] // s
     total = np.bincount(row, np.where(good, measure, 0.0), minlength=m)
-    # An unassembled end is bisected down to the singular input itself.
-    split = (open_ & ~good) | (good & big & (measure > PATH_STEP * total[row] / samples))
+    # An interval with one unassembled end is bisected down to the singular input itself. One
+    # with both ends unassembled (inside a gap the walk stepped over) holds no motion to place
+    # samples on: bisecting it would only double the nodes at every level.
+    placed = np.isfinite(pos).all(axis=(0, 2))
+    edge = placed[:-1] != placed[1:]
+    split = (open_ & ~good & edge) | (good & big & (measure > PATH_STEP * total[row] / samples))
     return split & ~stuck[:-1]
 
 
@@ -1024,36 +1086,31 @@ def _subset(params, points, shape, mask):
     return _take(params, points, shape, np.flatnonzero(mask))
 
 
-def _scatter(full, part, mask):
-    """Put ``part``'s segments (the linkages in ``mask``) into ``full``'s, widened as needed."""
-    (s0, e0, b0), (s1, e1, b1) = full, part
-    width = max(s0.shape[-1], s1.shape[-1])
-
-    def widen(a, fill=np.nan):
-        pad = width - a.shape[-1]
-        return np.concatenate((a, np.full(a.shape[:-1] + (pad,), fill)), -1) if pad else a
-
-    s0, e0, s1, e1 = (widen(a).copy() for a in (s0, e0, s1, e1))
-    s0[mask], e0[mask] = s1, e1
-    branches = {}
-    for k in b0:
-        b = widen(b0[k]).copy()
-        b[mask] = widen(b1[k])
-        branches[k] = b
-    return s0, e0, branches
-
-
-def _walk(plan, params, points, theta0, doc, period, usable, grid=GRID):
+def _walk(plan, params, points, theta0, doc, period, usable, grid=GRID, first=None):
     """Follow each linkage from ``theta0`` on its document branches until it closes.
 
-    Returns the segments' starts, ends and per-dyad branches, shape ``batch + (S,)``, NaN-padded.
+    At a limit position the dyad there changes branch and the input reverses; at a crossing
+    (:mod:`~linkwright.engine.crossings`) the dyad changes branch and the input runs on. After
+    a crossing a walk also stops at each turn's return to ``theta0``, to see whether it is home.
+    ``first`` says what ``theta0`` is (``PLAIN``, or ``LIMIT`` at an arc's end).
+
+    Returns the segments' starts, ends and per-dyad branches, and what each begins and ends at
+    (``PLAIN``, ``LIMIT`` or a crossing's dyad index), shape ``batch + (S,)``, NaN-padded.
     """
     dyads = plan.dyads
     theta = theta0.astype(float).copy()
     direction = np.ones(theta.shape)
     branches = {k: v.copy() for k, v in doc.items()}
     active = usable.copy()
-    starts, ends, snaps = [], [], []
+    crossed = np.zeros(theta.shape, dtype=bool)
+    kind = np.broadcast_to(PLAIN if first is None else first, theta.shape).astype(np.int64)
+    # A walk that starts on a crossing (an arc's end there, with a later dyad failing past it
+    # on the sign held) starts as its limit there: the machine runs through it.
+    on = crossings.starts_on(plan, params, points, theta, doc)
+    kind = np.where(on >= 0, on, kind)
+    turns = np.rint(period / TWO_PI)
+    cells = grid * int(turns.max()) if turns.size else grid
+    starts, ends, snaps, begins, finishes = [], [], [], [], []
     for _ in range(MAX_SEGMENTS):
         if not active.any():
             break
@@ -1061,29 +1118,57 @@ def _walk(plan, params, points, theta0, doc, period, usable, grid=GRID):
             plan, params, points, theta, direction, branches, period, grid
         )
         seg_end = np.where(hit, end, theta + direction * period)
+        # A crossing before the limit (or, with none, up to just past a turn: one may sit
+        # exactly a turn on).
+        reach = np.where(hit, end, seg_end + direction * (2.0 * period / cells))
+        cross, cross_k = crossings.crossings_within(
+            plan, params, points, np.where(active, theta, np.nan), reach, cells + 2, branches
+        )
+        cross, cross_k = cross[..., 0], cross_k[..., 0]
+        at_cross = active & np.isfinite(cross)
+        at_cross &= ~hit | ((cross - end) * direction < crossings.EXCLUDE)
+        seg_end = np.where(at_cross, cross, seg_end)
+        # Back at the start of a turn after a crossing: home, or on round again.
+        again = theta0 + period * (np.floor((theta - theta0) / period + 1e-9) + 1.0)
+        lap = active & crossed & (direction > 0) & ((again - seg_end) * direction < 0.0)
+        seg_end = np.where(lap, again, seg_end)
+        limit = hit & ~at_cross & ~lap
         starts.append(np.where(active, theta, np.nan))
         ends.append(np.where(active, seg_end, np.nan))
         snaps.append({k: v.copy() for k, v in branches.items()})
-        flip = active & hit
+        begins.append(kind.copy())
+        kind = np.where(limit, LIMIT, np.where(at_cross & ~lap, cross_k, PLAIN))
+        finishes.append(kind.copy())
+        flip = active & limit
+        cut = active & at_cross & ~lap
         for i, d in enumerate(dyads):
-            branches[d.name] = np.where(flip & (which == i), -branches[d.name], branches[d.name])
+            turn = (flip & (which == i)) | (cut & (cross_k == i))
+            branches[d.name] = np.where(turn, -branches[d.name], branches[d.name])
         direction = np.where(flip, -direction, direction)
+        crossed |= cut
         theta = np.where(active, seg_end, theta)
         gap = np.abs(np.remainder(theta - theta0 + 0.5 * period, period) - 0.5 * period)
         home = (gap <= 1e-9 * period) & (direction > 0)
         for k in branches:
             home &= branches[k] == doc[k]
-        active = active & hit & ~home
+        active = active & (limit | cut | crossed) & ~home
     if not starts:  # nothing in the batch assembles: no segments at all
         nan = np.full(theta.shape + (1,), np.nan)
-        return nan, nan.copy(), {k: np.full(theta.shape + (1,), np.nan) for k in doc}
+        plain = np.full(theta.shape + (1,), PLAIN)
+        return (
+            nan,
+            nan.copy(),
+            {k: np.full(theta.shape + (1,), np.nan) for k in doc},
+            plain,
+            plain.copy(),
+        )
     # A walk that does not close within MAX_SEGMENTS is not a circuit we can vouch for.
     failed = active
     seg_start = np.stack(starts, -1)
     seg_end = np.stack(ends, -1)
     seg_start = np.where(failed[..., None], np.nan, seg_start)
     seg_branches = {k: np.stack([s[k] for s in snaps], -1) for k in doc}
-    return seg_start, seg_end, seg_branches
+    return seg_start, seg_end, seg_branches, np.stack(begins, -1), np.stack(finishes, -1)
 
 
 def _next_limit(plan, params, points, theta, direction, branches, period, grid=GRID):

@@ -54,11 +54,13 @@ class _Context:
         theta: Array,
         branches: Mapping[str, ArrayLike],
         order: int,
+        crossings: Mapping[str, ArrayLike] | None = None,
     ) -> None:
         self.params = params
         self._theta = theta
         self.branches = branches
         self.order = order
+        self.crossings = crossings or {}
         self.states: dict[str, JointState] = {}
 
     @property
@@ -83,6 +85,14 @@ class _Context:
             b = np.asarray(self.params[key], dtype=float)[..., None]
         return np.broadcast_to(b, self._theta.shape)
 
+    def crossing(self, step_name: str) -> Array | None:
+        """Where the dyad's parents coincide (±1: placed as the limit from the side of larger
+        or smaller input, see :mod:`linkwright.engine.crossings`), 0 elsewhere; None if nowhere."""
+        side = self.crossings.get(step_name)
+        if side is None:
+            return None
+        return np.broadcast_to(np.asarray(side, dtype=float), self._theta.shape)
+
 
 def batch_shape(params: Mapping[str, ArrayLike], points: frozenset[str]) -> tuple[int, ...]:
     """Broadcast batch shape of a parameter mapping (point parameters carry a trailing 2)."""
@@ -101,6 +111,7 @@ def place_all(
     points: frozenset[str] = frozenset(),
     branches: Mapping[str, ArrayLike] | None = None,
     order: int = 2,
+    crossings: Mapping[str, ArrayLike] | None = None,
 ) -> tuple[Array, dict[str, JointState]]:
     """Run every step and return the broadcast inputs and the raw, unmasked joint states."""
     theta = np.asarray(theta, dtype=float)
@@ -108,12 +119,19 @@ def place_all(
         theta = theta[None]
     shape = np.broadcast_shapes(batch_shape(params, points) + (1,), theta.shape)
     theta = np.broadcast_to(theta, shape)
-    ctx = _Context(params, theta, branches or {}, order)
+    crossings = {k: v for k, v in (crossings or {}).items() if np.any(v)}
+    # A joint placed as a limit where its parents coincide takes its direction from their
+    # velocities, so those are computed even where only positions are asked for.
+    ctx = _Context(params, theta, branches or {}, max(order, 1) if crossings else order, crossings)
     # At (near-)singular samples the derivatives overflow to inf; those samples are masked as
     # not regular, so the overflow is expected and not worth a warning.
     with np.errstate(over="ignore"):
         for step in plan.steps:
-            ctx.states[step.name] = step.place(ctx)
+            placed = step.place(ctx)
+            if isinstance(placed, JointState):
+                ctx.states[step.name] = placed
+            else:  # a step that places several joints at once (a triad)
+                ctx.states.update(placed)
     return theta, ctx.states
 
 
@@ -125,6 +143,7 @@ def evaluate(
     points: frozenset[str] = frozenset(),
     branches: Mapping[str, ArrayLike] | None = None,
     order: int = 2,
+    crossings: Mapping[str, ArrayLike] | None = None,
 ) -> Motion:
     """Place every joint of ``plan`` at the inputs ``theta`` (radians).
 
@@ -137,8 +156,15 @@ def evaluate(
     branches : per-sample branch signs for some dyads (joint name → array broadcastable to the
         motion's shape), overriding their assembly parameter; used by circuit tracing.
     order : 0 for positions only, 1 to add velocities, 2 to add accelerations.
+    crossings : for some dyads (joint name → array like ``branches``), the samples that lie
+        exactly where the dyad's parents coincide (on the sphere: or are antipodal) and its
+        joint is undetermined: +1 or −1 places it as the limit of the given branch from larger
+        or smaller inputs, 0 as usual. Used by circuit tracing
+        (:mod:`linkwright.engine.crossings`).
     """
-    theta, states = place_all(plan, params, theta, points=points, branches=branches, order=order)
+    theta, states = place_all(
+        plan, params, theta, points=points, branches=branches, order=order, crossings=crossings
+    )
     valid = np.ones(theta.shape, dtype=bool)
     regular = np.ones(theta.shape, dtype=bool)
     for state in states.values():

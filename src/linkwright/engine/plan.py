@@ -85,6 +85,7 @@ class Context(Protocol):
     def point(self, key: str) -> Array: ...
     def joint(self, name: str) -> JointState: ...
     def branch(self, step_name: str, key: str) -> Array: ...
+    def crossing(self, step_name: str) -> Array | None: ...
     @property
     def theta(self) -> Array: ...
 
@@ -95,7 +96,9 @@ class Step(Protocol):
     @property
     def parents(self) -> tuple[str, ...]: ...
 
-    def place(self, ctx: Context) -> JointState: ...
+    def place(self, ctx: Context) -> JointState | dict[str, JointState]:
+        """The state of the joint the step places (of each joint, for a triad)."""
+        ...
 
 
 def _zeros_like_pos(pos: Array) -> Array:
@@ -198,10 +201,21 @@ class DyadRRR:
             )
         valid = j1.valid & j2.valid & (margin >= -ASSEMBLY_TOL) & (d2 > 0)
         pos = np.where(valid[..., None], pos, np.nan)
+        at = ctx.crossing(self.name)
+        if at is not None:
+            # Where P1 and P2 coincide, P − P1 ⟂ P2 − P1 in the limit, which turns with
+            # the parents' relative velocity (P2 − P1 ≈ (v2 − v1)·Δθ).
+            rate = j2.vel - j1.vel
+            with np.errstate(divide="ignore", invalid="ignore"):
+                arm = plane.perp(rate) / plane.norm(rate)[..., None]
+            limit = j1.pos + (sign * at * r1)[..., None] * arm
+            pos, valid, margin = _at_crossing(at, limit, pos, valid, margin, j1, j2)
         rel1, rel2 = pos - j1.pos, pos - j2.pos
         det_rel = plane.cross(rel1, rel2) / (r1 * r2)
         regular = valid & j1.regular & j2.regular & (np.abs(det_rel) > SINGULAR_SIN)
         regular &= margin > SINGULAR_MARGIN
+        if at is not None:
+            regular &= at == 0  # the derivative system is singular there
         vel = acc = None
         if ctx.order >= 1:
             vel, _ = plane.solve_2x2_rows(
@@ -457,10 +471,19 @@ class SphereDyad:
         # point, where X may indeed sit anywhere on its circle): X still meets both arcs.
         valid = j1.valid & j2.valid & (margin >= -ASSEMBLY_TOL) & (sin_d > 0)
         pos = np.where(valid[..., None], pos, np.nan)
+        at = ctx.crossing(self.name)
+        if at is not None:
+            # Where P1 and P2 coincide or are antipodal, X → cos r1·P1 + sin r1·(±n) with n
+            # the unit P1 × P2, which turns with its derivative v1 × P2 + P1 × v2.
+            rate = sphere.unit(sphere.cross(j1.vel, p2) + sphere.cross(p1, j2.vel))
+            limit = np.cos(r1)[..., None] * p1 + (sign * at * np.sin(r1))[..., None] * rate
+            pos, valid, margin = _at_crossing(at, limit, pos, valid, margin, j1, j2)
         # sin of the angle at X between its two links: 0 at a limit (toggle) position.
         det_rel = sphere.dot(pos, w) / (np.sin(r1) * np.sin(r2))
         regular = valid & j1.regular & j2.regular & (np.abs(det_rel) > SINGULAR_SIN)
         regular &= margin > SINGULAR_MARGIN
+        if at is not None:
+            regular &= at == 0  # the derivative system is singular there
         vel = acc = None
         zero = np.zeros(pos.shape[:-1])
         # At a singular sample the solve gives inf, and inf·0 below NaN: both are masked.
@@ -545,6 +568,20 @@ def _direction(angle: Array) -> Array:
     return np.stack(np.broadcast_arrays(np.cos(angle), np.sin(angle)), axis=-1)
 
 
+def _at_crossing(
+    at: Array, limit: Array, pos: Array, valid: NDArray[np.bool_], margin: Array, j1, j2
+) -> tuple[Array, NDArray[np.bool_], Array]:
+    """A dyad's joint where its parents coincide: ``limit`` at the samples marked in ``at``.
+
+    Its two links then lie on each other, at right angles to the parents' line in the limit:
+    the margin (sin² of the angle at P1) is 1, far from a limit position.
+    """
+    on = at != 0
+    ok = j1.valid & j2.valid & np.isfinite(limit).all(axis=-1)
+    pos = np.where(on[..., None], np.where(ok[..., None], limit, np.nan), pos)
+    return pos, np.where(on, ok, valid), np.where(on, 1.0, margin)
+
+
 def _mask_derivatives(
     vel: Array | None, acc: Array | None, regular: NDArray[np.bool_]
 ) -> tuple[Array | None, Array | None]:
@@ -574,20 +611,21 @@ class Plan:
     def __post_init__(self) -> None:
         known: set[str] = set()
         for step in self.steps:
-            if step.name in known:
-                raise ValueError(f"joint {step.name!r} is placed twice")
             for parent in step.parents:
                 if parent not in known:
                     raise ValueError(
                         f"joint {step.name!r} is built from {parent!r}, "
                         "which is not placed before it"
                     )
-            known.add(step.name)
+            for joint in placed_joints(step):
+                if joint in known:
+                    raise ValueError(f"joint {joint!r} is placed twice")
+                known.add(joint)
         for name in self.traced:
             if name not in known:
                 raise ValueError(f"traced joint {name!r} is not placed by the plan")
-        if any(isinstance(s, PLANE_STEPS) for s in self.steps) and any(
-            isinstance(s, SPHERE_STEPS) for s in self.steps
+        if any(_space_of(s) == "plane" for s in self.steps) and any(
+            _space_of(s) == "sphere" for s in self.steps
         ):
             raise ValueError("a plan places its joints either in the plane or on the sphere")
         for step in self.steps:
@@ -600,18 +638,38 @@ class Plan:
     @property
     def space(self) -> str:
         """``"sphere"`` for a plan of spherical steps, else ``"plane"``."""
-        return "sphere" if any(isinstance(s, SPHERE_STEPS) for s in self.steps) else "plane"
+        return "sphere" if any(_space_of(s) == "sphere" for s in self.steps) else "plane"
 
     @property
     def joints(self) -> tuple[str, ...]:
-        return tuple(s.name for s in self.steps)
+        return tuple(j for s in self.steps for j in placed_joints(s))
 
     @property
     def dyads(self) -> tuple[Step, ...]:
         return tuple(s for s in self.steps if isinstance(s, DYAD_TYPES))
 
+    @property
+    def triads(self) -> tuple[Step, ...]:
+        """The steps that place several joints at once, each on one of several poses."""
+        return tuple(s for s in self.steps if hasattr(s, "max_poses"))
+
     def step(self, name: str) -> Step:
+        """The step that places joint ``name``."""
         for s in self.steps:
-            if s.name == name:
+            if name in placed_joints(s):
                 return s
         raise KeyError(name)
+
+
+def placed_joints(step: Step) -> tuple[str, ...]:
+    """The joints a step places: its own name, or several for a triad."""
+    return tuple(getattr(step, "joints", (step.name,)))
+
+
+def _space_of(step: Step) -> str | None:
+    """ "plane" or "sphere" for a step kind that belongs to one space, None for a ground pivot."""
+    if isinstance(step, PLANE_STEPS):
+        return "plane"
+    if isinstance(step, SPHERE_STEPS):
+        return "sphere"
+    return getattr(step, "space", None)

@@ -73,6 +73,10 @@ the coupler) holds to this: it is also what tells real roots from complex ones n
 # complex pair about sqrt(eps) off the real axis, so the band is far wider than that; the
 # residual test after polishing decides.
 ROOT_BAND = 1e-3
+# The first equation's dependence on θ_C, relative to its size, below which it is taken not to
+# fix θ_C at a root θ_B (the four-bar's circles of C coincide there), so that θ_C is solved
+# from the second equation instead.
+FREE_PSI = 1e-8
 # Newton steps on the two bilinear equations: the eigenvalue roots are accurate to about
 # eps·condition, two quadratically convergent steps reach rounding, the rest is for roots near
 # a double root, where convergence is only linear.
@@ -374,6 +378,12 @@ def _solve_chunk(p: dict[str, Array]) -> tuple[Array, Array]:
     # Both solutions ψ of the first equation at each φ: l0 + l1 cos ψ + l2 sin ψ = 0.
     mv, _ = _trig(phi)
     row = np.einsum("nki,nij->nkj", mv, m1)
+    # Where it does not depend on ψ at that φ (B on ±D's circle of C, with BC = CD or their
+    # sum π: C anywhere on its circle as far as the four-bar goes), ψ comes from the second.
+    other = np.einsum("nki,nij->nkj", mv, m2)
+    size = np.abs(m1).max(axis=(-2, -1))[..., None]
+    loose = np.hypot(row[..., 1], row[..., 2]) <= FREE_PSI * size
+    row = np.where(loose[..., None], other, row)
     rho = np.hypot(row[..., 1], row[..., 2])
     with np.errstate(divide="ignore", invalid="ignore"):
         half = np.arccos(np.clip(-row[..., 0] / rho, -1.0, 1.0))

@@ -18,6 +18,7 @@ __all__ = [
     "ProjectionError",
     "angle_at",
     "arc",
+    "clear_centre",
     "cross",
     "dot",
     "frame_error",
@@ -311,3 +312,54 @@ def lambert_azimuthal(
             )
         k = np.sqrt(2.0 / one_plus)
     return np.stack((k * (p @ east), k * (p @ up)), axis=-1)
+
+
+# How far (1 + p·c) a drawn point keeps from the centre's antipode: 1e-6 is 0.08° of arc, where
+# the map is still one point (a point at 1e-12 and nearer is refused as the whole rim).
+CLEAR = 1e-6
+# Tilts tried, in degrees, each in eight bearings: the first centre clear of every point wins.
+_TILTS = (2.0, 5.0, 10.0, 20.0, 45.0, 90.0)
+
+
+def clear_centre(preferred: ArrayLike, points: ArrayLike) -> Array:
+    """A map centre near ``preferred`` with none of ``points`` at its antipode.
+
+    The antipode of a Lambert map's centre has no one place on the map (it is the whole rim),
+    so a centre chosen as the mean direction of some curves is refused where another drawn point
+    lies there (a pivot opposite a curve's mean; a joint passing through it). Such a centre is
+    tilted by the least of a few angles, in one of eight bearings, that keeps every point at
+    least ``CLEAR`` (in 1 + p·c) from the antipode; with none, the tilt that keeps them
+    furthest. Rows holding NaN are ignored.
+
+    >>> c = clear_centre([1.0, 0.0, 0.0], [[-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    >>> bool(1.0 + c @ [-1.0, 0.0, 0.0] > 1e-6), round(float(np.degrees(np.arccos(c[0]))), 6)
+    (True, 2.0)
+    >>> clear_centre([0.0, 0.0, 2.0], [[1.0, 0.0, 0.0]])  # nothing opposite: as given
+    array([0., 0., 1.])
+    """
+    c = _direction(preferred, "centre")
+    if c.shape != (3,):
+        raise ProjectionError(f"centre: must be one 3-vector, got shape {c.shape}")
+    pts = np.asarray(points, dtype=float).reshape(-1, 3)
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    if pts.size == 0:
+        return c
+    pts = pts / norm(pts)[:, None]
+
+    def clearance(centre: Array) -> float:
+        return float(np.min(1.0 + pts @ centre))
+
+    if clearance(c) >= CLEAR:
+        return c
+    east, up = map_frame(c)
+    best, best_gap = c, clearance(c)
+    for tilt in np.radians(_TILTS):
+        for bearing in np.radians(np.arange(0.0, 360.0, 45.0)):
+            way = np.cos(bearing) * east + np.sin(bearing) * up
+            trial = np.cos(tilt) * c + np.sin(tilt) * way
+            gap = clearance(trial)
+            if gap >= CLEAR:
+                return trial
+            if gap > best_gap:
+                best, best_gap = trial, gap
+    return best

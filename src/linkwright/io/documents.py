@@ -876,9 +876,9 @@ FAMILY_SPECS: dict[str, FamilySpec] = {
             FieldSpec("assembly2", "sign", default=1),
         ),
     ),
-    # Paper 001: a1 = AD, a2 = AB, a3 = BC, a4 = CD, a6 = CE, σ = angle BCE, a7 = EF, a8 = FG,
-    # a9 = DG. No check that a1 + a9 < 360 (the class's): two arcs each below 180 cannot reach
-    # it, in radians either (the two largest floats below π sum to less than 2π).
+    # Paper 001: a1 = AD, a2 = AB, a3 = BC, a4 = CD, a6 = CE, σ = 180° − angle BCE, a7 = EF,
+    # a8 = FG, a9 = DG. No check that a1 + a9 < 360 (the class's): two arcs each below 180
+    # cannot reach it, in radians either (the two largest floats below π sum to less than 2π).
     "spherical-stephenson3": FamilySpec(
         fields=(
             FieldSpec("a1", "arc"),

@@ -10,8 +10,8 @@ The drawings show the linkage at one pose and the closed paths of the traced joi
   can be solved again exactly, even at a limit position, where a joint moves like the square
   root of the input), then ``<joint>_x``, ``<joint>_y`` (and ``<joint>_z`` on the sphere, where
   joints are unit vectors) for *every* joint of the plan in plan order, ground joints included
-  (constant columns, kept so that every row is a whole pose). Numbers are written with
-  ``repr``: full double precision. Plain CSV without a comment line, for
+  (constant columns, kept so that every row is a whole pose). Numbers are written by
+  :func:`number_text`: full double precision. Plain CSV without a comment line, for
   ``numpy.loadtxt(path, delimiter=",", skiprows=1)`` and spreadsheets.
 * **SVG** (:func:`export_svg`): plain SVG 1.1 text, in groups ``<g id="ground">`` (pivots as
   triangles, fixed slider guides dashed), ``"links"`` (binary links as lines, links of three
@@ -88,6 +88,7 @@ __all__ = [
     "export_dxf",
     "export_svg",
     "joint_paths",
+    "number_text",
     "topology",
 ]
 
@@ -549,7 +550,34 @@ def _write_csv(paths: _Paths, path: pathlib.Path) -> pathlib.Path:
 
 
 def _csv_row(k: int, row: Array) -> list[str]:
-    return [str(k), *(repr(float(x)) for x in row)]
+    return [str(k), *(number_text(x) for x in row)]
+
+
+def number_text(value: object) -> str:
+    """One number as every CSV (and full-precision text) writer of linkwright prints it.
+
+    A float gives the shortest text that reads back as the same double (Python's ``repr``), an
+    integer has no decimal point, NaN (a missing value) gives the empty string and infinities
+    ``inf`` and ``-inf`` (which ``float`` reads back). NumPy scalars print as their values:
+    under NumPy 2, ``repr`` of one is ``np.float64(…)``, which no CSV reader takes for a number.
+
+    Raises
+    ------
+    TypeError
+        For anything that is not a real number (a bool, a string, an array of several values):
+        a text column is the writer's to declare, not this function's to guess.
+
+    Examples
+    --------
+    >>> [number_text(v) for v in (np.float64(-180.0), np.int64(3), 0.1, math.nan, -math.inf)]
+    ['-180.0', '3', '0.1', '', '-inf']
+    """
+    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Real):
+        raise TypeError(f"not a number: {value!r}")
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    x = float(value)
+    return "" if math.isnan(x) else repr(x)
 
 
 # --------------------------------------------------------------------------------------------

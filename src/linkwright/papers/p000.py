@@ -923,7 +923,7 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
 
 
 def _write_csv(path: Path, rows: list) -> Path:
-    """One row per check (a dataclass), its fields as the columns; numbers with all digits."""
+    """One row per check (a dataclass), its fields as the columns (:func:`_csv_cell`)."""
     import csv
     import dataclasses
 
@@ -932,10 +932,24 @@ def _write_csv(path: Path, rows: list) -> Path:
         writer = csv.writer(handle)
         writer.writerow(names)
         for row in rows:
-            writer.writerow(
-                [repr(v) if isinstance(v, float) else v for v in (getattr(row, n) for n in names)]
-            )
+            writer.writerow([_csv_cell(getattr(row, n)) for n in names])
     return path
+
+
+def _csv_cell(value: object) -> str:
+    """A CSV cell: numbers with all digits (``inf`` where a method fails, as the checks say),
+    ``true``/``false``, text as it is, and a list of arcs as JSON (``[[lo, hi], …]``)."""
+    import json
+
+    from linkwright.io.exports import number_text
+
+    if isinstance(value, bool | np.bool_):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return value
+    if isinstance(value, tuple | list):
+        return json.dumps([[float(x) for x in arc] for arc in value])
+    return number_text(value)
 
 
 def _markdown(modes: list[Fig8Mode], samples: int, pictures: list[str]) -> str:

@@ -59,7 +59,7 @@ EXAMPLE: dict[str, float] = {
     "a3": 110.0,  # BC
     "a4": 90.0,  # CD
     "a6": 80.0,  # CE
-    "sigma": 70.0,  # angle BCE
+    "sigma": 70.0,  # 180° − angle BCE (eq. 3's σ: angle BCE is 110°)
     "a7": 65.0,  # EF
     "a8": 85.0,  # FG, the other input link
     "a9": 25.0,  # DG
@@ -885,7 +885,8 @@ def reproduce(out: str | Path) -> list[Path]:
         "",
         "Zong, Lu, An, Zhang, *A simple method for position analysis of Stephenson-III "
         "spherical six bar mechanism*. Fixed joints A, D, G; input link AB; ternary coupler "
-        "BCE (BC = a3, CE = a6, angle BCE = σ); CD; EF; FG. A = (0, 0, 1), "
+        "BCE (BC = a3, CE = a6, angle BCE = 180° − σ: eq. 3's cos BE = cos a3 cos a6 − "
+        "sin a3 sin a6 cos σ); CD; EF; FG. A = (0, 0, 1), "
         "D = (0, sin a1, cos a1), G at arc a1 + a9 from A beyond D; θ1 = ∠BAD with eq. 5's "
         "B = (sin a2 sin θ1, sin a2 cos θ1, cos a2); θ4 = ∠CDG as in eq. 5's C; θ6 the angle "
         "of F about +OG from the great circle G→(away from D) (the supplement of ∠FGD, with "

@@ -768,9 +768,22 @@ def reproduce(out_dir: str | Path) -> list[Path]:
     cells = reproduce_spherical() + reproduce_planar()
     page = out / "paper003.md"
     page.write_text(markdown(cells, synthesis_example()), encoding="utf-8")
-    written = [page]
+    return [page, *write_tables(cells, out)]
+
+
+def write_tables(cells: list[Cell], out: Path) -> list[Path]:
+    """``paper003-table1.csv`` … ``paper003-table4.csv`` in ``out``: one row per cell,
+    :data:`CSV_FIELDS`; ``table``, ``side``, ``row``, ``column`` and ``status`` are text,
+    ``printed`` the number as printed (its digits kept), the rest numbers with all digits (empty
+    where there is none). Returns the paths written."""
+    from linkwright.io.exports import number_text
+
+    def number(x: Any) -> str:
+        return "" if x is None else number_text(x)
+
+    written = []
     for k in (1, 2, 3, 4):
-        path = out / f"paper003-table{k}.csv"
+        path = Path(out) / f"paper003-table{k}.csv"
         with path.open("w", newline="", encoding="utf-8") as fh:
             w = csv.writer(fh)
             w.writerow(CSV_FIELDS)
@@ -783,12 +796,9 @@ def reproduce(out_dir: str | Path) -> list[Path]:
                             c.row,
                             c.column,
                             c.printed,
-                            repr(c.ours),
-                            repr(c.low),
-                            repr(c.high),
+                            *(number(x) for x in (c.ours, c.low, c.high)),
                             c.status,
-                            "" if c.grid is None else repr(c.grid),
-                            "" if c.literal is None else repr(c.literal),
+                            *(number(x) for x in (c.grid, c.literal)),
                         ]
                     )
         written.append(path)

@@ -131,7 +131,11 @@ def _cycle(mechanism: Mechanism, frames: int) -> _Cycle:
             "nothing to animate"
         )
     full = bool(arcs.full)
-    turns = max(1, round(float(np.asarray(arcs.period)) / (2.0 * math.pi))) if full else 1
+    # One period of the input, or two where the circuit comes back on its other branch after
+    # one (an exact deltoid, passing the meeting of its dyad's pivots): what the samples span.
+    theta = motion.input[np.isfinite(motion.input)]
+    span = float(theta[-1] - theta[0]) * motion.input.size / max(motion.input.size - 1, 1)
+    turns = max(1, round(span / (2.0 * math.pi))) if full else 1
     return _Cycle(motion, np.arange(frames) * step, full, turns)
 
 

@@ -858,15 +858,24 @@ def _graticule(ax: Axes, centre: Array, step: float, box: tuple[float, float, fl
             ax.text(*xy[i], label, ha="left", va="bottom", rotation=90, **text)
 
 
-def _map_centre(mechanism: Mechanism, feats: _Features) -> Array:
+def _map_centre(
+    mechanism: Mechanism, feats: _Features, pose: dict[str, Array] | None = None
+) -> Array:
     """The normalised mean of every circuit sample of the curves drawn (the first traced
-    joint in every mode, the others in the document's), or of the ground pivots if none."""
+    joint in every mode, the others in the document's), or of the ground pivots if none;
+    tilted where a drawn point (any joint of any circuit, a pivot, the pose) lies at its
+    antipode, which has no one place on the map
+    (:func:`~linkwright.geometry.sphere.clear_centre`)."""
     traced = mechanism.plan.traced
     samples = [c.positions[traced[0]] for mode in feats.modes for c in mode.circuits]
     samples += [c.positions[j] for j in traced[1:] for c in feats.own.circuits]
     pivots = np.array(list(_ground(mechanism).values())).reshape(-1, 3)
     everything = np.concatenate(samples) if samples else np.zeros((0, 3))
-    return _mean_direction(everything, _mean_direction(pivots, _Z))
+    centre = _mean_direction(everything, _mean_direction(pivots, _Z))
+    drawn = [p.reshape(-1, 3) for mode in feats.modes for c in mode.circuits
+             for p in c.positions.values()]  # fmt: skip
+    drawn += [pivots] + [np.asarray(p, dtype=float).reshape(-1, 3) for p in (pose or {}).values()]
+    return sphere.clear_centre(centre, np.concatenate(drawn))
 
 
 def _map_panel(
@@ -879,7 +888,7 @@ def _map_panel(
     curves' mean direction; returns that centre."""
     curves = _styled_curves(mechanism, feats)
     ground = _ground(mechanism)
-    centre = _map_centre(mechanism, feats)
+    centre = _map_centre(mechanism, feats, pose)
 
     def project(p: Array) -> Array:
         return lambert_azimuthal(p, centre)

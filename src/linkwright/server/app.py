@@ -2,17 +2,19 @@
 
 :func:`create_app` builds a FastAPI application over one data directory (the library's SQLite
 file and the built-in atlases live there). Every failure a user can cause answers JSON
-``{"error": "..."}`` with one line naming the field and the problem: a ``ValueError`` (a bad
-document, an unreachable drag, points that are not a curve, a value over a limit) is 422, a
-``LookupError`` (an unknown library entry or example) or an unknown path is 404, a name clash is
-409; a request body over :data:`MAX_BODY_BYTES` is 413; a write sent by another site's page is
-403 (:mod:`linkwright.server.guard`). Nothing answers a traceback. Every bound on a request is in
-:mod:`linkwright.server.limits` and served at ``GET /api/limits``.
+``{"error": "..."}`` with one line naming the field and the problem: one of
+:data:`USER_ERRORS` (a bad document, an unreachable drag, points that are not a curve, a value
+over a limit) is 422, an unknown library entry, example or path is 404, a name clash is 409; a
+request body over :data:`MAX_BODY_BYTES` is 413; a write sent by another site's page is 403
+(:mod:`linkwright.server.guard`). The server's own state answers for itself (a damaged, full or
+read-only library: 500, 507, 409; a busy server: 503 with ``Retry-After``). Any other exception
+is a bug, never blamed on the request: 500 with one line naming its type, and the traceback in
+the log (:mod:`linkwright.server.errors`). Nothing answers a traceback. Every bound on a request
+is in :mod:`linkwright.server.limits` and served at ``GET /api/limits``.
 """
 
 from __future__ import annotations
 
-import logging
 from collections.abc import Iterable
 from importlib import resources
 from pathlib import Path
@@ -28,18 +30,80 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import compile_path
 
 from linkwright import __version__
-from linkwright.io import document_to_dict, list_examples, load_example
+from linkwright.analysis.conic import ConicError
+from linkwright.analysis.spherical import InvalidHingeRatio, NotASphericalFourBar
+from linkwright.atlas.atlas import AtlasError
+from linkwright.atlas.build import AtlasBuildError
+from linkwright.atlas.families import AtlasFamilyError
+from linkwright.atlas.query import AtlasQueryError
+from linkwright.atlas.store import AtlasStoreError
+from linkwright.curves.fourier import CurveError
+from linkwright.engine.circuits import NoPeriod
+from linkwright.engine.cost import CostError
+from linkwright.geometry.sphere import ProjectionError
+from linkwright.io import DocumentError, document_to_dict, list_examples, load_example
+from linkwright.io.exports import ExportError
+from linkwright.mechanisms.base import InvalidMechanism
+from linkwright.mechanisms.sixbar import NoConstructionPlan
+from linkwright.plot.animation import AnimationError
+from linkwright.plot.diagrams import DiagramError
+from linkwright.plot.sphere import SpherePlotError
+from linkwright.plot.view import PlotError
 from linkwright.server import library, limits, scene, tools
+from linkwright.server.errors import RequestLog, StatusError
 from linkwright.server.guard import LOOPBACK_HOSTS, Guard
 from linkwright.server.guard import error_response as _error
 from linkwright.server.schema import DocumentBody, document_examples, examples
+from linkwright.server.work import WorkQueue
+from linkwright.synthesis.ellipse import EllipseError
 
-__all__ = ["LOOPBACK_HOSTS", "MAX_BODY_BYTES", "create_app"]
+__all__ = ["LOOPBACK_HOSTS", "MAX_BODY_BYTES", "USER_ERRORS", "NotFound", "create_app"]
 
 MAX_BODY_BYTES = limits.BODY_BYTES.value
 """Largest request body accepted (:data:`linkwright.server.limits.BODY_BYTES`)."""
 
-_log = logging.getLogger("linkwright.server")
+
+class NotFound(LookupError):
+    """No such thing where the request looked (an example, a family): 404."""
+
+
+USER_ERRORS: tuple[type[ValueError], ...] = (
+    # The request's own values: a document, a limit (its estimated cost too), a library name,
+    # a tool's inputs.
+    DocumentError,
+    limits.LimitError,
+    CostError,
+    library.LibraryError,
+    scene.DragError,
+    tools.ToolsError,
+    EllipseError,
+    ExportError,
+    # What the library refuses about the linkage a document describes (it cannot be built,
+    # traced, drawn or analysed as asked): the document's fault, named by the message.
+    InvalidMechanism,
+    NoConstructionPlan,
+    NoPeriod,
+    DiagramError,
+    PlotError,
+    SpherePlotError,
+    AnimationError,
+    ProjectionError,
+    CurveError,
+    ConicError,
+    NotASphericalFourBar,
+    InvalidHingeRatio,
+    AtlasError,
+    AtlasBuildError,
+    AtlasFamilyError,
+    AtlasQueryError,
+    AtlasStoreError,
+)
+"""The errors that are the request's fault, answered 422 (a :class:`~linkwright.server.library.
+LibraryConflict` 409). Any other ``ValueError`` is a bug: 500, with its traceback in the log."""
+
+NOT_FOUND: tuple[type[LookupError], ...] = (NotFound, library.LibraryNotFound)
+"""The lookups that are the request's fault (404); a ``KeyError`` or ``IndexError`` is a bug.
+A plain ``LookupError`` (raised on purpose, with a message) counts as one of these too."""
 
 
 class ErrorBody(BaseModel):
@@ -73,7 +137,7 @@ class SceneRequest(BaseModel):
 
     document: DocumentBody
     samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value, strict=True)
-    at: float | None = None
+    at: float | None = Field(None, allow_inf_nan=False)
     diagrams: bool = True
 
 
@@ -94,9 +158,18 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
     "4XX": {
         "model": ErrorBody,
         "description": "The request cannot be served as sent: 400 unreadable, 403 sent by "
-        "another site's page, 404 no such entry, 409 name taken, 413 body too large, 421 wrong "
-        "host, 422 invalid (the message names the field; GET /api/limits lists every limit).",
-    }
+        "another site's page (or without the token of a server reachable beyond loopback), "
+        "404 no such entry, 408 body too slow, 409 name taken or library read-only, 413 body "
+        "too large, 421 wrong host, 422 invalid (the message names the field; GET /api/limits "
+        "lists every limit).",
+    },
+    "5XX": {
+        "model": ErrorBody,
+        "description": "The server cannot serve it now: 500 an internal error (the server log "
+        "has the details) or a damaged library (the message says what to do), 503 busy (every "
+        "work slot taken and the queue full: try again after Retry-After seconds), 507 disk "
+        "full.",
+    },
 }
 
 
@@ -125,6 +198,8 @@ def _describe(err: dict[str, Any]) -> str:
         return f"{where}: must be at most {ctx['le']}, got {_shown(got)}"
     if kind == "greater_than_equal":
         return f"{where}: must be at least {ctx['ge']}, got {_shown(got)}"
+    if kind == "finite_number":
+        return f"{where}: must be a finite number, got {_shown(got)}"
     if kind in ("too_long", "string_too_long"):
         unit = "characters" if kind == "string_too_long" else "items"
         size = len(got) if isinstance(got, str | list) else ctx.get("actual_length")
@@ -170,7 +245,10 @@ def _http_message(request: Request, exc: StarletteHTTPException) -> str:
 
 
 def create_app(
-    data_dir: str | Path | None = None, *, allowed_hosts: Iterable[str] | None = None
+    data_dir: str | Path | None = None,
+    *,
+    allowed_hosts: Iterable[str] | None = None,
+    token: str | None = None,
 ) -> FastAPI:
     """The workbench application over ``data_dir`` (default: :func:`default_data_dir`).
 
@@ -180,8 +258,11 @@ def create_app(
         page and the examples come from the package), and nothing a client sends is used as a
         path.
     allowed_hosts : the only ``Host`` names answered (others get 421); a server bound to the
-        loopback address passes :data:`LOOPBACK_HOSTS`, which defeats DNS rebinding. None
-        answers any.
+        loopback address passes :data:`LOOPBACK_HOSTS` (and the address itself), which
+        defeats DNS rebinding. None answers any.
+    token : if given, every request but ``/api/health`` must carry it (a cookie the page's
+        first load sets from ``?token=``, the query, or ``Authorization: Bearer``); else 403.
+        A server reachable from other machines needs one (:mod:`linkwright.server.guard`).
 
     Examples
     --------
@@ -200,7 +281,11 @@ def create_app(
     app = FastAPI(title="linkwright workbench", version=__version__, responses=_ERRORS)
     app.state.data_dir = root
     app.state.library = library.Library(root / "library.sqlite3")
-    app.add_middleware(Guard, allowed_hosts=allowed_hosts)
+    # Outermost last: the log sees every answer, the guard every request before any work
+    # slot is taken (a slow or refused body never holds one).
+    app.add_middleware(WorkQueue)
+    app.add_middleware(Guard, allowed_hosts=allowed_hosts, token=token)
+    app.add_middleware(RequestLog)
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
@@ -212,30 +297,37 @@ def create_app(
     async def _invalid(_: Request, exc: RequestValidationError) -> JSONResponse:
         return _error(422, _validation_message(exc))
 
+    # A handler that raises hands the exception on to RequestLog: a 500, logged with its
+    # traceback.
     @app.exception_handler(ValueError)
     async def _value(_: Request, exc: ValueError) -> JSONResponse:
+        if not isinstance(exc, USER_ERRORS):
+            raise exc
         return _error(409 if isinstance(exc, library.LibraryConflict) else 422, str(exc))
 
     @app.exception_handler(LookupError)
     async def _missing(_: Request, exc: LookupError) -> JSONResponse:
+        if not (isinstance(exc, NOT_FOUND) or type(exc) is LookupError):
+            raise exc
         message = exc.args[0] if exc.args and isinstance(exc.args[0], str) else str(exc)
         return _error(404, message)
 
-    @app.exception_handler(Exception)
-    async def _unexpected(_: Request, exc: Exception) -> JSONResponse:
-        _log.exception("unexpected error")
-        return _error(500, f"internal error ({type(exc).__name__}); the server log has the details")
+    @app.exception_handler(StatusError)
+    async def _status(_: Request, exc: StatusError) -> JSONResponse:
+        return _error(exc.status, str(exc), exc.headers)
 
     @app.get("/", include_in_schema=False)
     def index() -> FileResponse:
         return FileResponse(_static_dir() / "index.html", media_type="text/html")
 
+    # Health and limits are answered in the event loop (async, no thread): a thread pool
+    # full of work must never delay them.
     @app.get("/api/health", response_model=Health)
-    def health() -> dict[str, Any]:
+    async def health() -> dict[str, Any]:
         return {"ok": True, "version": __version__}
 
     @app.get("/api/limits", response_model=dict[str, LimitEntry])
-    def limits_route() -> dict[str, dict[str, Any]]:
+    async def limits_route() -> dict[str, dict[str, Any]]:
         """Every limit on a request: its value (and least value), unit, the fields it applies
         to and why it has that value."""
         return limits.as_json()
@@ -260,7 +352,7 @@ def create_app(
     ) -> dict[str, Any]:
         # Only a bundled example's name is ever read, never a path made from the request.
         if name.removesuffix(".toml") not in list_examples():
-            raise LookupError(f"example: no bundled example named {_shown(name)}")
+            raise NotFound(f"example: no bundled example named {_shown(name)}")
         return document_to_dict(load_example(name))
 
     # A scene is ~10^4 numbers: orjson writes it in well under a millisecond, where FastAPI's

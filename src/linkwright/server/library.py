@@ -17,6 +17,12 @@ Errors: :class:`LibraryError` (a ``ValueError``: a bad name, format or file; ans
 :class:`LibraryConflict` (a name already taken; 409), :class:`LibraryNotFound` (a
 ``LookupError``: no such entry; 404). An invalid document raises
 :class:`~linkwright.io.DocumentError` (also a ``ValueError``) naming its field.
+
+The file itself may stop a request (:mod:`linkwright.server.store`): a damaged file is
+reported as damaged, with what to do, by every request (500), reads and writes alike, so that
+nothing is saved into it; a full disk refuses changes with "disk full" (507), while a delete
+always works; a library that cannot be written (a read-only folder or file system) is opened
+read-only: lists, loads and exports work, and changes are refused as read-only (409).
 """
 
 from __future__ import annotations
@@ -28,8 +34,8 @@ import sqlite3
 import time
 import tomllib
 import unicodedata
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -41,7 +47,7 @@ from starlette.concurrency import run_in_threadpool
 
 from linkwright.io import document_to_dict, parse_document
 from linkwright.io.documents import dumps_toml
-from linkwright.server import limits
+from linkwright.server import limits, store
 from linkwright.server.guard import attachment, shown_filename
 from linkwright.server.schema import DocumentBody, document_examples, examples
 
@@ -68,12 +74,35 @@ FORMATS = ("toml", "json")
 _MEDIA_TYPES = {"toml": "application/toml", "json": "application/json"}
 
 _SCHEMA = 1
+_TABLE = """CREATE TABLE IF NOT EXISTS entries (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    name TEXT NOT NULL UNIQUE,
+    document TEXT NOT NULL,
+    family TEXT NOT NULL,
+    title TEXT,
+    created REAL NOT NULL,
+    modified REAL NOT NULL)"""
 _BUSY_SECONDS = 30.0
 # SQLite's INTEGER is 64-bit signed; a larger Python int cannot even be bound.
 _MAX_ID = 2**63 - 1
 # Characters a name may not hold: controls (tabs and newlines included), lone surrogates (they
 # cannot be stored as UTF-8) and the Unicode line and paragraph separators (a name is one line).
 _REFUSED_CATEGORIES = frozenset({"Cc", "Cs", "Zl", "Zp"})
+# Bidirectional controls (marks, embeddings, overrides, isolates): a right-to-left override
+# shows "report\u202egpj.exe" as "reportexe.jpg", so a name would read as what it is not.
+_BIDI_CONTROLS = frozenset(
+    [
+        "\u061c",
+        "\u200e",
+        "\u200f",
+        *map(chr, range(0x202A, 0x202F)),
+        *map(chr, range(0x2066, 0x206A)),
+    ]
+)
+# Characters that show nothing: formats (zero-width space, joiners), marks with nothing to
+# mark, spaces, and the blank fillers of Hangul and Braille. A name of only these looks empty.
+_INVISIBLE_CATEGORIES = frozenset({"Cf", "Mn", "Me", "Zs"})
+_BLANKS = frozenset("\u115f\u1160\u3164\uffa0\u2800")
 _SUFFIXED = re.compile(r"^(?P<base>.*) \((?P<n>[0-9]+)\)$")
 
 
@@ -112,7 +141,18 @@ def _check_name(name: Any, field: str = "name") -> str:
             raise LibraryError(
                 f"{field}: contains U+{ord(ch):04X} (a control character or line break)"
             )
+        if ch in _BIDI_CONTROLS:
+            raise LibraryError(
+                f"{field}: contains U+{ord(ch):04X} (a bidirectional control, which can make a "
+                "name read differently from what it is)"
+            )
+    if all(_invisible(ch) for ch in name):
+        raise LibraryError(f"{field}: shows nothing (only zero-width or format characters)")
     return name
+
+
+def _invisible(ch: str) -> bool:
+    return unicodedata.category(ch) in _INVISIBLE_CATEGORIES or ch in _BLANKS
 
 
 def _name_from(title: str | None) -> str:
@@ -121,10 +161,14 @@ def _name_from(title: str | None) -> str:
     if not title:
         return "untitled"
     cleaned = "".join(
-        " " if unicodedata.category(ch) in _REFUSED_CATEGORIES else ch for ch in title
+        " " if unicodedata.category(ch) in _REFUSED_CATEGORIES else ch
+        for ch in title
+        if ch not in _BIDI_CONTROLS
     )
     cleaned = " ".join(unicodedata.normalize("NFC", cleaned).split())[:MAX_NAME].strip()
-    return cleaned or "untitled"
+    if all(_invisible(ch) for ch in cleaned):
+        return "untitled"
+    return cleaned
 
 
 def _check_id(entry_id: Any) -> int:
@@ -235,6 +279,8 @@ class Library:
     ------
     LibraryError
         If ``path`` exists but is not a linkwright library (or is one from a newer version).
+        A damaged library, or one that cannot be written, is opened all the same: its state
+        is :attr:`damage` and :attr:`read_only`, and each request is answered accordingly.
 
     Notes
     -----
@@ -273,7 +319,7 @@ class Library:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         try:
-            self._create()
+            self._store = store.Store(self.path, self._prepare, _BUSY_SECONDS)
         except sqlite3.DatabaseError as exc:
             raise LibraryError(
                 f"library: {self.path} is not a linkwright library ({exc})"
@@ -282,60 +328,34 @@ class Library:
     def __repr__(self) -> str:
         return f"Library({str(self.path)!r})"
 
-    def _create(self) -> None:
-        conn = sqlite3.connect(self.path, timeout=_BUSY_SECONDS, isolation_level=None)
-        try:
-            # WAL is a property of the file (it persists); it lets readers go on while one
-            # writer commits, and a commit is one append to the log, so a kill cannot tear it.
-            conn.execute("PRAGMA journal_mode=WAL")
-            conn.execute("PRAGMA synchronous=FULL")
-            conn.execute("BEGIN IMMEDIATE")
-            try:
-                version = conn.execute("PRAGMA user_version").fetchone()[0]
-                if version > _SCHEMA:
-                    raise LibraryError(
-                        f"library: {self.path} was written by a newer linkwright "
-                        f"(schema {version}; this one reads {_SCHEMA})"
-                    )
-                conn.execute(
-                    """CREATE TABLE IF NOT EXISTS entries (
-                        id INTEGER PRIMARY KEY AUTOINCREMENT,
-                        name TEXT NOT NULL UNIQUE,
-                        document TEXT NOT NULL,
-                        family TEXT NOT NULL,
-                        title TEXT,
-                        created REAL NOT NULL,
-                        modified REAL NOT NULL)"""
-                )
-                conn.execute(f"PRAGMA user_version={_SCHEMA}")
-            except BaseException:
-                conn.execute("ROLLBACK")
-                raise
-            conn.execute("COMMIT")
-        finally:
-            conn.close()
+    @property
+    def read_only(self) -> bool:
+        """Whether the library cannot be written (lists and loads work, changes are refused)."""
+        return self._store.read_only
 
-    @contextmanager
-    def _transaction(self, write: bool) -> Iterator[sqlite3.Connection]:
-        """One connection and one transaction: committed when the block ends, rolled back if
-        it raises. A write takes SQLite's write lock at once (``BEGIN IMMEDIATE``), so two
-        writers queue instead of one failing when it tries to upgrade a read lock."""
-        conn = sqlite3.connect(self.path, timeout=_BUSY_SECONDS, isolation_level=None)
-        try:
-            conn.row_factory = sqlite3.Row
-            # FULL: the log is flushed to disk at every commit, so a save that returned
-            # survives a power cut too, not only a killed process.
-            conn.execute("PRAGMA synchronous=FULL")
-            conn.execute("BEGIN IMMEDIATE" if write else "BEGIN")
-            try:
-                yield conn
-            except BaseException:
-                if conn.in_transaction:
-                    conn.execute("ROLLBACK")
-                raise
-            conn.execute("COMMIT")
-        finally:
-            conn.close()
+    @property
+    def damage(self) -> str | None:
+        """Why the library is damaged (what every request is answered), or None."""
+        return self._store.damage
+
+    def state_note(self) -> str:
+        """A few words on the library's state for the line ``linkwright serve`` prints."""
+        return self._store.state_note()
+
+    def _prepare(self, conn: sqlite3.Connection) -> None:
+        version = conn.execute("PRAGMA user_version").fetchone()[0]
+        if version > _SCHEMA:
+            raise LibraryError(
+                f"library: {self.path} was written by a newer linkwright "
+                f"(schema {version}; this one reads {_SCHEMA})"
+            )
+        conn.execute(_TABLE)
+        conn.execute(f"PRAGMA user_version={_SCHEMA}")
+
+    def _transaction(self, write: bool) -> AbstractContextManager[sqlite3.Connection]:
+        """One connection and one transaction (:meth:`linkwright.server.store.Store.
+        transaction`): committed when the block ends, rolled back if it raises."""
+        return self._store.transaction(write)
 
     @staticmethod
     def _entry(row: sqlite3.Row, document: bool = True) -> dict[str, Any]:
@@ -524,9 +544,15 @@ class Library:
             If there is no such entry.
         """
         entry_id = _check_id(entry_id)
-        with self._transaction(write=True) as conn:
-            if conn.execute("DELETE FROM entries WHERE id = ?", (entry_id,)).rowcount == 0:
-                raise LibraryNotFound(f"library: no entry with id {entry_id}")
+
+        def run() -> None:
+            with self._transaction(write=True) as conn:
+                if conn.execute("DELETE FROM entries WHERE id = ?", (entry_id,)).rowcount == 0:
+                    raise LibraryNotFound(f"library: no entry with id {entry_id}")
+
+        # Works on a full disk too (the store gives up its reserve for it), so that deleting
+        # can always make room.
+        self._store.delete(run)
         return entry_id
 
     def import_text(

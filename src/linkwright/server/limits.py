@@ -4,7 +4,9 @@ The workbench computes whatever a request asks for (a scene, a study, a match), 
 quantity a client chooses is bounded: the body's size and nesting, sample counts, list sizes,
 the match's top-K, string lengths. :data:`LIMITS` holds them all; the app serves the table
 read-only at ``GET /api/limits``. A request over a limit is answered 413 (the body's size) or
-422 (anything else) with ``{"error": "..."}`` naming the field and the limit.
+422 (anything else) with ``{"error": "..."}`` naming the field and the limit. The server's own
+bounds (work at once, connections, time to send a request) are in the table too; past those
+the answer is 503 with ``Retry-After`` or 408.
 
 Examples
 --------
@@ -18,25 +20,38 @@ linkwright.server.limits.LimitError: document: title: 1,001 characters, at most 
 
 from __future__ import annotations
 
-import re
 from dataclasses import asdict, dataclass
 from typing import Any
 
-import numpy as np
+from linkwright.engine import cost as _cost
+
+# Measured on the bytes in one linear pass (its own module: see there why not a regex).
+from linkwright.server.scan import json_depth
 
 __all__ = [
     "BODY_BYTES",
+    "BODY_SECONDS",
+    "CONNECTIONS",
     "DOCUMENT_LIST",
     "ELLIPSE_FAMILY",
+    "GEAR_TURNS",
+    "HEADER_SECONDS",
     "JSON_DEPTH",
     "LIMITS",
     "MATCH_TOP",
     "NAME",
     "POINTS",
+    "REFINE_POINTS",
+    "REQUEST_BYTES",
+    "REQUEST_SECONDS",
+    "REQUEST_WORK",
     "SAMPLES",
     "STUDY_STEPS",
     "TEXT",
     "TITLE",
+    "WORK_QUEUE",
+    "WORK_SLOTS",
+    "WORK_WAIT",
     "Limit",
     "LimitError",
     "as_json",
@@ -158,6 +173,110 @@ NAME = Limit(
     "A name is one line in the library list and a file name on export.",
 )
 
+# The server's own bounds (not a request's fields): how much work runs at once, how many
+# connections stay open, and how long a client may take to send a request. Enforced by
+# server/work.py (503 with Retry-After) and server/runner.py (connections, header and body
+# timeouts).
+WORK_SLOTS = Limit(
+    "work_slots",
+    4,
+    "requests",
+    "requests computed at once: every POST, PUT, PATCH and DELETE under /api (reads, health "
+    "and the page never take a slot)",
+    "Two per core of the 2-core machine the workbench is measured on: more would share the same "
+    "cores (and Python's lock) and finish no sooner, while filling the thread pool that the "
+    "page's reads use.",
+)
+WORK_QUEUE = Limit(
+    "work_queue",
+    32,
+    "requests",
+    "requests waiting for a work slot; one more is answered 503 with Retry-After at once",
+    "The page sends one computation per action; 32 waiting is eight rounds of the slots, longer "
+    "than a person waits, and each waiting request holds its body (at most body_bytes).",
+)
+WORK_WAIT = Limit(
+    "work_wait",
+    30,
+    "seconds",
+    "the time a request waits for a work slot before it is answered 503 with Retry-After",
+    "A person gives up well before; an answer saying the server is busy is better than a "
+    "page that hangs.",
+)
+CONNECTIONS = Limit(
+    "connections",
+    256,
+    "connections",
+    "open connections; past the bound a new one closes the slowest of those in the middle of "
+    "a request (fewest bytes a second); those being answered, kept alive, or new and silent "
+    "for under a quarter second are kept, up to twice the bound, past which a new one is "
+    "refused (503)",
+    "A browser opens at most six per server. Twice the bound (512) stays under the 1,024 files "
+    "a process may open by default, which 1,100 half-sent connections once exhausted (where "
+    "the process may open fewer, the bound is lowered to fit).",
+)
+HEADER_SECONDS = Limit(
+    "header_seconds",
+    10,
+    "seconds",
+    "the time from a connection's opening (or its previous answer) to a whole request line "
+    "and headers; a slower connection is closed (408 if it had sent anything)",
+    "A browser sends its headers in one packet; a client that trickles them (slowloris) would "
+    "otherwise hold a connection for ever.",
+)
+BODY_SECONDS = Limit(
+    "body_seconds",
+    30,
+    "seconds",
+    "the time from a request's headers to the end of its body; a slower body is answered 408 "
+    "and the connection closed",
+    "The largest body (2 MB) arrives in 30 s at 70 kB/s, slower than any network the page is "
+    "used over; a client that trickles its body would otherwise hold a connection for ever.",
+)
+
+# What one request may cost, whatever its sizes: the cost estimate of the work (checked before
+# it starts: 422 naming what to lower), and its time (checked between its steps: 503). One
+# table for the command line and the server: linkwright.engine.cost; enforced by
+# server/budget.py in the scene, drag, study, match, ellipse and export routes.
+REQUEST_WORK = Limit(
+    "request_work",
+    int(_cost.REQUEST_WORK.value),
+    "work units (one joint placed at one input)",
+    "the estimated work of a scene, drag, study, match, ellipse or export: circuits × samples "
+    "× joints × steps, with each circuit's limit search (a gear ratio multiplies the circuits)",
+    _cost.REQUEST_WORK.why,
+)
+REQUEST_BYTES = Limit(
+    "request_bytes",
+    int(_cost.REQUEST_BYTES.value),
+    "bytes",
+    "the estimated peak memory of the same requests, their answer included",
+    _cost.REQUEST_BYTES.why,
+)
+REQUEST_SECONDS = Limit(
+    "request_seconds",
+    int(_cost.REQUEST_SECONDS.value),
+    "seconds",
+    "the time a scene, drag, study, match or ellipse may compute: checked between circuits, "
+    "steps and refinements; past it the answer is 503",
+    _cost.REQUEST_SECONDS.why,
+)
+GEAR_TURNS = Limit(
+    "gear_turns",
+    int(_cost.GEAR_TURNS.value),
+    "turns of a crank per input turn",
+    "the size of a gear ratio whose circuits are traced (scene, study, export)",
+    _cost.GEAR_TURNS.why,
+)
+REFINE_POINTS = Limit(
+    "refine_points",
+    int(_cost.REFINE_POINTS.value),
+    "points",
+    "the drawn points a refined match fits (more are thinned evenly; the distance is still "
+    "measured to all of them)",
+    _cost.REFINE_POINTS.why,
+)
+
 LIMITS: dict[str, Limit] = {
     limit.name: limit
     for limit in (
@@ -172,6 +291,17 @@ LIMITS: dict[str, Limit] = {
         TITLE,
         TEXT,
         NAME,
+        WORK_SLOTS,
+        WORK_QUEUE,
+        WORK_WAIT,
+        CONNECTIONS,
+        HEADER_SECONDS,
+        BODY_SECONDS,
+        REQUEST_WORK,
+        REQUEST_BYTES,
+        REQUEST_SECONDS,
+        GEAR_TURNS,
+        REFINE_POINTS,
     )
 }
 """Every limit by name (what ``GET /api/limits`` serves)."""
@@ -258,28 +388,3 @@ def check_document(document: Any, field: str = "document") -> None:
             limit = TITLE if path == "title" else TEXT
             if len(value) > limit.value:
                 raise over(limit, f"{field}: {path or 'document'}", len(value))
-
-
-# --------------------------------------------------------------------------------------------
-# A JSON body's nesting, before it is parsed
-# --------------------------------------------------------------------------------------------
-
-_STRING = re.compile(rb'"[^"\\]*(?:\\.[^"\\]*)*"', re.DOTALL)
-_NOT_BRACKETS = bytes(b for b in range(256) if b not in b"[]{}")
-
-
-def json_depth(body: bytes) -> int:
-    """How deeply a JSON text nests its arrays and objects (0 for a scalar), read from the
-    bytes without parsing them (the parser is what a deep body would overflow); brackets inside
-    strings do not count. For a body that is not JSON the count is still a bound on what a
-    parser would recurse through.
-
-    >>> json_depth(b'{"a": [1, {"b": "[[["}]}'), json_depth(b"[" * 40), json_depth(b"7")
-    (3, 40, 0)
-    """
-    brackets = _STRING.sub(b"", body).translate(None, _NOT_BRACKETS)
-    if not brackets:
-        return 0
-    codes = np.frombuffer(brackets, dtype=np.uint8)
-    step = np.where((codes == ord("[")) | (codes == ord("{")), 1, -1)
-    return max(0, int(np.cumsum(step).max()))

@@ -38,23 +38,19 @@ class LocalServer:
     """``with LocalServer(data_dir) as url:`` serves the workbench on a free loopback port in a
     thread of this process, and stops it on leaving. It listens on 127.0.0.1 only and answers
     only the loopback names (:data:`~linkwright.server.LOOPBACK_HOSTS`), as ``linkwright serve``
-    does by default."""
+    does by default, and is configured by the same :func:`~linkwright.server.runner.make_server`
+    (every bound on connections, time and work). ``log_level="error"`` leaves out the line per
+    failed request (for a benchmark that fails requests on purpose)."""
 
-    def __init__(self, data_dir: str | Path) -> None:
-        import uvicorn
-
+    def __init__(self, data_dir: str | Path, *, log_level: str = "warning") -> None:
         from linkwright.server import LOOPBACK_HOSTS, create_app
+        from linkwright.server.runner import make_server
 
         with socket.socket() as s:
             s.bind(("127.0.0.1", 0))
             self.port = int(s.getsockname()[1])
-        config = uvicorn.Config(
-            create_app(data_dir, allowed_hosts=LOOPBACK_HOSTS),
-            host="127.0.0.1",
-            port=self.port,
-            log_level="warning",
-        )
-        self.server = uvicorn.Server(config)
+        self.app = create_app(data_dir, allowed_hosts=LOOPBACK_HOSTS)
+        self.server = make_server(self.app, "127.0.0.1", self.port, log_level=log_level)
         self.thread = threading.Thread(target=self.server.run, daemon=True)
 
     def __enter__(self) -> str:

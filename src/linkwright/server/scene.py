@@ -25,9 +25,10 @@ from typing import Any
 import numpy as np
 import orjson
 
-from linkwright.engine.circuits import NoPeriod
+from linkwright.engine import cost
+from linkwright.engine.circuits import InputArcs, NoPeriod
 from linkwright.engine.plan import DyadRRP, DyadRRR, SphereDyad
-from linkwright.geometry.sphere import lambert_azimuthal
+from linkwright.geometry.sphere import clear_centre, lambert_azimuthal
 from linkwright.io import (
     FAMILY_SPECS,
     Document,
@@ -39,10 +40,11 @@ from linkwright.io import (
     topology,
 )
 from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS, WORKING_RANGE
-from linkwright.mechanisms import Mechanism, circuits, solve
+from linkwright.mechanisms import Mechanism, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.plot.diagrams import FAMILY_NAMES, DiagramError, diagram_series
 from linkwright.plot.view import range_text
+from linkwright.server import budget
 from linkwright.server.limits import SAMPLES, check_document
 
 __all__ = [
@@ -411,7 +413,29 @@ def _map_centre(motions: list[Any], traced: list[str]) -> np.ndarray | None:
     p = p[np.isfinite(p).all(axis=1)]
     c = p.sum(axis=0) if p.size else np.zeros(3)
     n = float(np.linalg.norm(c))
-    return c / n if n > 1e-9 else np.array([0.0, 0.0, 1.0])
+    centre = c / n if n > 1e-9 else np.array([0.0, 0.0, 1.0])
+    # Every joint is mapped: none may lie at the centre's antipode (the whole rim of the map).
+    drawn = [np.asarray(v).reshape(-1, 3) for m in motions for v in m.positions.values()]
+    return clear_centre(centre, np.concatenate(drawn))
+
+
+def _planned(
+    doc: Document, samples: int, diagrams: bool
+) -> list[tuple[str, dict[str, int], Document, bool, InputArcs]]:
+    """Each assembly mode to draw with its input's arcs, once the whole scene's estimated cost
+    (every circuit of every mode, the diagrams, the answer) is known to fit a request's budget
+    (:mod:`linkwright.server.budget`)."""
+    out = []
+    estimate: cost.Estimate | None = None
+    numbers = 0.0
+    for label, signs, variant, own in _variants(doc):
+        arcs, part, answer = budget.scene_part(variant.mechanism, samples, own and diagrams)
+        estimate = part if estimate is None else estimate + part
+        numbers += answer
+        out.append((label, signs, variant, own, arcs))
+    if estimate is not None:
+        budget.check_scene(estimate, numbers, samples)
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -503,7 +527,24 @@ def scene(
     ([], None)
     >>> s["message"]  # doctest: +ELLIPSIS
     'This linkage cannot be assembled at any input angle, in any assembly mode: ...'
+
+    A scene whose circuits cost more than a request may is refused before they are traced
+    (:mod:`linkwright.server.budget`):
+
+    >>> geared = document_to_dict(load_example("geared-fivebar"))
+    >>> geared["mechanism"]["ratio"] = 1000.0
+    >>> scene(geared, samples=360)
+    Traceback (most recent call last):
+    ...
+    linkwright.server.budget.TooCostly: too costly: the gear ratio 1000 turns a crank 1,000 \
+times per input turn; circuits can be traced up to 64 (the limit search samples 1,440 inputs a \
+turn); lower the ratio to 64 or less
     """
+    with budget.request("samples"):
+        return _scene(document, samples=samples, at=at, diagrams=diagrams)
+
+
+def _scene(document: Any, *, samples: int, at: float | None, diagrams: bool) -> dict[str, Any]:
     started = time.perf_counter()
     low, high = SAMPLES.least, SAMPLES.value
     if isinstance(samples, bool) or not isinstance(samples, int) or not low <= samples <= high:
@@ -529,8 +570,9 @@ def scene(
     message = None
     traced_variants: list[tuple[str, dict[str, int], bool, Any, list[Any]]] = []
     try:
-        for label, signs, variant, own in _variants(doc):
-            arcs, motions = circuits(variant.mechanism, samples, order=0)
+        planned = _planned(doc, samples, diagrams)
+        for label, signs, variant, own, arcs in planned:
+            motions = budget.trace_circuits(variant.mechanism, arcs, samples)
             if motions:
                 traced_variants.append((label, signs, own, arcs, motions))
             else:
@@ -664,6 +706,8 @@ _SKIP_LABELS = ("ratio",)
 
 
 def _pose_of(raw: dict[str, Any], theta: float) -> dict[str, np.ndarray] | None:
+    # Every drag and handle search is a loop of these: the request's deadline is checked here.
+    cost.check_time()
     try:
         mech = _parse(raw).mechanism
     except DocumentError:
@@ -697,6 +741,18 @@ def drag(document: Any, joint: str, to: Any, at: float) -> dict[str, Any]:
     >>> [round(float(x), 9) for x in _pose_of(out["document"], math.radians(out["at"]))["P"]]
     [1.0, 3.0]
     """
+    with budget.request("the number of joints"):
+        return _drag(document, joint, to, at)
+
+
+def _joint_count(doc: Document) -> int:
+    try:
+        return len(doc.mechanism.plan.steps)
+    except NoConstructionPlan:
+        return len(type(doc.mechanism).plan.steps)
+
+
+def _drag(document: Any, joint: str, to: Any, at: float) -> dict[str, Any]:
     doc = _parse(document, client=True)
     raw = document_to_dict(doc)
     sphere = _space(doc) == "sphere"
@@ -719,6 +775,7 @@ def drag(document: Any, joint: str, to: Any, at: float) -> dict[str, Any]:
     if not math.isfinite(at):
         raise DragError(f"at: must be a finite angle in degrees, got {at!r}")
     theta = math.radians(at)
+    budget.check(budget.drag_estimate(len(fields(raw)), _joint_count(doc)))
     base = _pose_of(raw, theta)
     if base is None:
         raise DragError(f"the linkage is not assembled at θ = {at:.6g}°, so nothing can be dragged")

@@ -46,6 +46,8 @@ from pydantic import BaseModel, ConfigDict, Field, WithJsonSchema
 
 from linkwright.atlas import AtlasError, build, open_atlas, query
 from linkwright.atlas.atlas import Atlas
+from linkwright.engine import cost
+from linkwright.engine.circuits import InputArcs
 from linkwright.io import (
     Document,
     DocumentError,
@@ -58,10 +60,10 @@ from linkwright.io import (
     save_document,
 )
 from linkwright.io.documents import WORKING_RANGE
-from linkwright.mechanisms import DoubleSlider, GearedFiveBar, Mechanism, circuit, circuits
+from linkwright.mechanisms import DoubleSlider, GearedFiveBar, Mechanism, circuit, input_range
 from linkwright.mechanisms import solve as solve_motion
 from linkwright.mechanisms.sixbar import NoConstructionPlan
-from linkwright.server import limits
+from linkwright.server import budget, limits
 from linkwright.server.schema import DocumentBody, document_examples, examples
 from linkwright.synthesis.ellipse import (
     EllipseError,
@@ -98,11 +100,9 @@ ATLAS_COUNT = 20_000
 matches drawn curves well once refined (``LINKWRIGHT_WORKBENCH_ATLAS_COUNT`` or
 ``app.state.atlas_count`` change it)."""
 ATLAS_COUNT_ENV = "LINKWRIGHT_WORKBENCH_ATLAS_COUNT"
-REFINE_POINTS = 500
-"""Most drawn points a refined match fits (evenly spaced among them). The refinement solves for
-one input angle per point, so its time grows faster than the count: 1,000 points of an ellipse
-took 6 s, 3,000 took 26 s and 20,000 did not finish in 14 minutes; the page draws a few hundred.
-"""
+REFINE_POINTS = int(cost.REFINE_POINTS.value)
+"""Most drawn points a refined match fits (evenly spaced among them;
+:data:`linkwright.engine.cost.REFINE_POINTS` gives the reason)."""
 CURVE_SAMPLES = 256
 """Samples of each candidate's curve sent back for drawing."""
 FAMILY_TOLERANCE = 1e-9
@@ -209,9 +209,12 @@ def _polyline(points: Array, valid: NDArray[np.bool_] | None = None) -> list[lis
     ]
 
 
-def _traced_curves(mechanism: Mechanism, samples: int) -> tuple[bool, bool, dict[str, list]]:
+def _traced_curves(
+    mechanism: Mechanism, samples: int, arcs: InputArcs | None = None
+) -> tuple[bool, bool, dict[str, list]]:
     """(assembles somewhere, turns fully, each traced joint's closed circuits joined by null)."""
-    arcs, motions = circuits(mechanism, samples, order=0)
+    arcs = input_range(mechanism) if arcs is None else arcs
+    motions = budget.trace_circuits(mechanism, arcs, samples)
     full = bool(arcs.full) and bool(motions)
     if not motions:
         return False, False, {}
@@ -396,7 +399,23 @@ def study(body: StudyRequest) -> dict[str, Any]:
     ...
     linkwright.server.tools.StudyError: pivot: 'P' is not a fixed pivot of this linkage (its
     fixed pivots: A0, B0)
+
+    Its cost (every step's circuits and the answer) is estimated before any step is traced:
+
+    >>> geared = document_to_dict(load_example("geared-fivebar"))
+    >>> geared["mechanism"]["ratio"] = 64.0
+    >>> study(StudyRequest(document=geared, pivot="A0", count=50, samples=4096))
+    Traceback (most recent call last):
+    ...
+    linkwright.server.budget.TooCostly: too costly: tracing 51 steps × 42 circuits of 4,096 \
+samples (6 joints) needs about 5.1e+08 units of work (at most 5e+07 per request) and 3.1 GB of \
+memory (at most 268 MB per request); lower count to 3 or fewer, or the gear ratio
     """
+    with budget.request("count or samples"):
+        return _study(body)
+
+
+def _study(body: StudyRequest) -> dict[str, Any]:
     doc = _document(body.document)
     mech = doc.mechanism
     # Read from the document: a mechanism without a construction plan cannot tell its space.
@@ -438,6 +457,8 @@ def study(body: StudyRequest) -> dict[str, Any]:
         for k in range(body.count + 1):
             shift = k * body.step * d
             candidates.append((k, shift, _moved(doc, path, shift), None))
+    budget.check_study(mech, body.count, body.samples)
+    spent = 0.0
     steps = []
     for k, shift, raw, why in candidates:
         entry: dict[str, Any] = {
@@ -460,7 +481,12 @@ def study(body: StudyRequest) -> dict[str, Any]:
             else:
                 entry["document"] = document_to_dict(step_doc)
                 try:
-                    assembles, full, curves = _traced_curves(step_doc.mechanism, body.samples)
+                    cost.check_time()
+                    arcs = budget.step_arcs(step_doc.mechanism, body.samples, k, spent)
+                    spent += budget.study_estimate(step_doc.mechanism, arcs, 1, body.samples).work
+                    assembles, full, curves = _traced_curves(step_doc.mechanism, body.samples, arcs)
+                except (budget.TooCostly, cost.CostError):
+                    raise  # the whole study is refused, not noted as one step's problem
                 except ValueError as exc:  # e.g. no construction plan
                     entry["note"] = str(exc)
                 else:
@@ -631,12 +657,25 @@ def match(body: MatchRequest, request: Request) -> dict[str, Any]:
     fitted = points
     if body.refine and len(points) > REFINE_POINTS:
         fitted = points[np.linspace(0, len(points) - 1, REFINE_POINTS).round().astype(int)]
+    # The re-ranking traces about 60 candidates; a refinement fits one input per point.
+    estimate = cost.Estimate(60 * 5 * (256 + cost.CALL_UNITS), 1e7, "matching a curve")
+    if body.refine:
+        estimate = estimate + cost.refine(len(fitted), 5)
+    budget.check(estimate.holding(budget.answer_bytes(2.0 * body.top * CURVE_SAMPLES, True)))
+    # Opening (on first use, building) the atlas is the workbench's setup, not this request's
+    # work: the time budget starts after it.
     atlas = _load_atlas(request.app)
+    with budget.request("the points, or match without refine"):
+        return _match(body, atlas, points, fitted)
+
+
+def _match(body: MatchRequest, atlas: Atlas, points: Array, fitted: Array) -> dict[str, Any]:
     matches = query(atlas, fitted, top=body.top, refine=body.refine, budget=2.0)
     centred = points - points.mean(axis=0)
     size = float(np.sqrt(np.mean(np.sum(centred**2, axis=1))))
     candidates = []
     for rank, m in enumerate(matches, start=1):
+        cost.check_time()
         doc = mechanism_to_dict(m.mechanism, title=f"Atlas match {rank} (entry {m.atlas_id})")
         motion = circuit(m.mechanism, CURVE_SAMPLES, order=0)
         curve = _polyline(np.asarray(motion.positions["P"]), motion.valid)
@@ -779,6 +818,11 @@ def _trammel_entry(m: DoubleSlider, t: Trammel, s1: float, s2: float) -> dict[st
 def ellipse(body: EllipseRequest) -> dict[str, Any]:
     """The ellipse fitted to the points and ``count`` double sliders of the ∞² family tracing
     it, spread over the slider angles (s1, s2) of R's and Q's guides from the major axis."""
+    with budget.request("count"):
+        return _ellipse(body)
+
+
+def _ellipse(body: EllipseRequest) -> dict[str, Any]:
     points = _points(body.points, 5)
     circle = _check_circle(body.circle)
     try:
@@ -797,11 +841,20 @@ def ellipse(body: EllipseRequest) -> dict[str, Any]:
     # s1 = 90°, s2 = 0°: Archimedes' trammel (α = 90°, h = 0), first; then the spread family.
     angles = np.vstack((np.radians([[90.0, 0.0]]), family_angles(body.count)))
     members = doubleslider_family(t, angles[:, 0], angles[:, 1], circle=circle)
-    entries = (
-        _trammel_entry(_member(members, i), t, float(s1), float(s2))
-        for i, (s1, s2) in enumerate(np.degrees(angles))
+    # Each member is checked against the ellipse at 360 samples (4 joints each).
+    budget.check(
+        cost.Estimate(
+            len(angles) * 4 * (360 + 3 * cost.CALL_UNITS),
+            len(points) * 64 * 8,
+            f"fitting {len(points):,} points and checking {len(angles)} double sliders",
+        )
     )
-    out["family"] = [e for e in entries if e is not None]
+    out["family"] = []
+    for i, (s1, s2) in enumerate(np.degrees(angles)):
+        cost.check_time()
+        entry = _trammel_entry(_member(members, i), t, float(s1), float(s2))
+        if entry is not None:
+            out["family"].append(entry)
     return out
 
 
@@ -908,6 +961,10 @@ def export_file(
         raise ToolsError(f"at: must be a finite input angle in degrees, got {body.at}")
     at = None if body.at is None else math.radians(body.at)
     name = _filename(doc, fmt)
+    with budget.request("samples"):
+        budget.check_export(
+            doc.mechanism, fmt, body.samples, gif_frames=GIF_FRAMES, gif_dpi=GIF_DPI
+        )
     scratch = Path(request.app.state.data_dir) / "scratch"
     scratch.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="export-", dir=scratch) as folder:
