@@ -9,7 +9,7 @@ assembly choice.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields, is_dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -30,13 +30,24 @@ __all__ = [
 Array = NDArray[np.float64]
 
 
+family_dataclass = dataclass(frozen=True, eq=False)
+"""The decorator every family uses: frozen, with :class:`Mechanism`'s value equality (a plain
+dataclass would compare arrays with ``==``, which has no single truth value)."""
+
+
 class InvalidMechanism(ValueError):
     """A mechanism's dimensions are not a linkage (names the field and the problem)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Mechanism:
-    """Base of the named families. Subclasses declare their plan and their point fields."""
+    """Base of the named families. Subclasses declare their plan and their point fields.
+
+    A mechanism is a value: its arrays are read-only copies, two mechanisms are equal when their
+    family and fields are, they hash accordingly, and a batch indexes and slices into
+    mechanisms. Families are declared with :data:`family_dataclass` (a frozen dataclass that
+    keeps this equality).
+    """
 
     family: ClassVar[str]
     plan: ClassVar[Plan]
@@ -51,7 +62,9 @@ class Mechanism:
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            value = np.asarray(getattr(self, f.name), dtype=float)
+            # A copy, made read-only: the caller's array stays theirs, and the value cannot
+            # change under a motion or a cache computed from it.
+            value = np.array(getattr(self, f.name), dtype=float)
             if f.name in self.point_fields and value.shape[-1:] != (2,):
                 raise InvalidMechanism(f"{f.name}: must be a point [x, y], got shape {value.shape}")
             if not np.all(np.isfinite(value)):
@@ -69,6 +82,7 @@ class Mechanism:
                 bad = value[np.abs(value) != 1]
                 shown = repr(float(value)) if value.ndim == 0 else bad.ravel()[:3].tolist()
                 raise InvalidMechanism(f"{f.name}: must be 1 or -1, got {shown}")
+            value.flags.writeable = False
             object.__setattr__(self, f.name, value)
         try:
             self.batch_shape  # noqa: B018 - broadcasting check
@@ -76,8 +90,13 @@ class Mechanism:
             raise InvalidMechanism(f"dimension arrays do not broadcast together: {exc}") from None
 
     def params(self) -> dict[str, Array]:
-        """The named parameters of the plan (lengths, radians, points, assembly sign)."""
-        return {f.name: getattr(self, f.name) for f in fields(self)}
+        """The named parameters of the plan (lengths, radians, points, assembly sign): every
+        numeric field; a word (a Stephenson III's ``input``) chooses the plan, not a number."""
+        return {
+            f.name: value
+            for f in fields(self)
+            if not isinstance(value := getattr(self, f.name), str)
+        }
 
     @property
     def points(self) -> frozenset[str]:
@@ -101,6 +120,72 @@ class Mechanism:
 
     def with_assembly(self, assembly: ArrayLike) -> Mechanism:
         return replace(self, assembly=assembly)
+
+    # -- a value: equality, hashing and batch indexing -------------------------------------------
+
+    def __eq__(self, other: object) -> bool:
+        """Two mechanisms are equal when they are of one family with equal fields, arrays
+        compared whole (shape and every value)."""
+        if type(other) is not type(self):
+            return NotImplemented
+        return _frozen(self) == _frozen(other)
+
+    def __hash__(self) -> int:
+        return hash((type(self).__name__, _frozen(self)))
+
+    def __len__(self) -> int:
+        shape = self.batch_shape
+        if not shape:
+            raise TypeError(f"{type(self).__name__} is one mechanism, not a batch: it has no len()")
+        return shape[0]
+
+    def __getitem__(self, index: object) -> Mechanism:
+        """The mechanisms of a batch at ``index`` (an integer, a slice, an array of indices or
+        a mask over the batch's leading axes), as one mechanism or a smaller batch.
+
+        Examples
+        --------
+        >>> from linkwright.mechanisms import FourBar
+        >>> batch = FourBar(A0=[0, 0], B0=[4, 0], crank=[1.0, 1.5, 2.0], coupler=5, rocker=3.5)
+        >>> len(batch), float(batch[1].crank), batch[1:].batch_shape
+        (3, 1.5, (2,))
+        >>> batch[0] == FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=3.5)
+        True
+        >>> FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=3.5)[0]
+        Traceback (most recent call last):
+        ...
+        TypeError: FourBar is one mechanism, not a batch: it cannot be indexed
+        """
+        shape = self.batch_shape
+        if not shape:
+            raise TypeError(
+                f"{type(self).__name__} is one mechanism, not a batch: it cannot be indexed"
+            )
+        return self._indexed(shape, index)
+
+    def _indexed(self, shape: tuple[int, ...], index: object) -> Mechanism:
+        changes = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not isinstance(value, np.ndarray):
+                continue
+            tail = value.shape[-1:] if f.name in self.point_fields else ()
+            changes[f.name] = np.broadcast_to(value, shape + tail)[index]  # type: ignore[index]
+        return replace(self, **changes)
+
+
+def _frozen(value: object) -> object:
+    """A hashable image of a field value: arrays by shape and values (−0.0 as 0.0), dataclass
+    values (a composed linkage's joints) field by field, sequences item by item."""
+    if isinstance(value, np.ndarray):
+        return ("array", value.shape, (value + 0.0).tobytes())
+    if is_dataclass(value) and not isinstance(value, type):
+        return (type(value).__name__, tuple(_frozen(getattr(value, f.name)) for f in fields(value)))
+    if isinstance(value, tuple | list):
+        return tuple(_frozen(v) for v in value)
+    if isinstance(value, float | int | np.floating | np.integer) and not isinstance(value, bool):
+        return float(value) + 0.0
+    return value
 
 
 def _show(value: NDArray) -> str:

@@ -86,7 +86,7 @@ from linkwright.engine import (
 )
 from linkwright.engine.evaluate import batch_shape
 from linkwright.geometry import plane, sphere
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
 
 __all__ = [
     "JOINT_TYPES",
@@ -521,7 +521,7 @@ def _check_sphere_crank(
 # --------------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class Linkage(Mechanism):
     """A planar or spherical linkage composed joint by joint, driven by its crank(s).
 
@@ -660,6 +660,9 @@ about the guide's pole; write that DyadJoint instead
         _check_repeats(joints, space)
         steps, params, points = _compile(joints, space)
         object.__setattr__(self, "_plan", Plan(steps, traced=traced))
+        for key, value in params.items():  # read-only copies, as every family's fields
+            params[key] = frozen = np.array(value, dtype=float)
+            frozen.flags.writeable = False
         object.__setattr__(self, "_params", params)
         object.__setattr__(self, "_points", points)
         try:
@@ -805,6 +808,22 @@ about the guide's pole; write that DyadJoint instead
     def params(self) -> dict[str, Array]:
         """The plan's named parameters (a fresh mapping; the arrays are the linkage's own)."""
         return dict(self._params)  # type: ignore[attr-defined]
+
+    def _indexed(self, shape: tuple[int, ...], index: object) -> Linkage:
+        """A batch's linkages at ``index``: every joint's numbers indexed over the batch."""
+
+        def pick(joint: Joint) -> Joint:
+            changes = {}
+            for f in fields(joint):
+                value = getattr(joint, f.name)
+                if isinstance(value, str) or f.name in ("name",):
+                    continue
+                array = np.asarray(value, dtype=float)
+                tail = array.shape[-1:] if f.name == "at" else ()
+                changes[f.name] = np.broadcast_to(array, shape + tail)[index]  # type: ignore[index]
+            return replace(joint, **changes)
+
+        return replace(self, joints=tuple(pick(j) for j in self.joints))  # type: ignore[union-attr]
 
     def joint(self, name: str) -> Joint:
         """The spec of the joint called ``name`` (``KeyError`` if there is none)."""

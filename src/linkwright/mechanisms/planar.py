@@ -7,7 +7,6 @@ slider (M, R, Q, P).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -15,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import Crank, DyadRRP, DyadRRR, Fixed, Motion, Plan, Rigid, Trammel
 from linkwright.geometry import plane
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
 
 __all__ = ["DoubleSlider", "FourBar", "GearedFiveBar", "SliderCrank"]
 
@@ -32,7 +31,7 @@ def _frame_error(motion: Motion, origin: str, toward: str, point: str, u, v) -> 
     return plane.frame_error(o, t, p, np.asarray(u)[..., None], np.asarray(v)[..., None])
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class FourBar(Mechanism):
     """Planar four-bar: crank A0A, coupler AB, rocker B0B, frame A0B0, coupler point P.
 
@@ -90,7 +89,7 @@ class FourBar(Mechanism):
         }
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class SliderCrank(Mechanism):
     """Slider-crank: crank A0A, rod AB, slider pin B on a line, rod point P.
 
@@ -150,7 +149,7 @@ class SliderCrank(Mechanism):
         }
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class GearedFiveBar(Mechanism):
     """Geared five-bar (paper 002): cranks A0A and B0B geared together, links AC and BC.
 
@@ -289,7 +288,7 @@ class GearedFiveBar(Mechanism):
         }
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class DoubleSlider(Mechanism):
     """Double slider (elliptic trammel) of paper 004, driven by its coupler angle θ.
 

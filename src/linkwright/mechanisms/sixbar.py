@@ -47,7 +47,6 @@ output (``Stephenson3(input="output")``), and not with construction plans.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
@@ -56,7 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 from linkwright.engine import Crank, DyadRRR, Fixed, Motion, Plan, Rigid
 from linkwright.engine.plan import Step
 from linkwright.geometry import plane
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
 
 __all__ = [
     "NoConstructionPlan",
@@ -120,7 +119,7 @@ def _frame_error(motion: Motion, step: Rigid, params: dict[str, Array]) -> Array
     return plane.frame_error(o, t, p, u, v)
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class SixBar(Mechanism):
     """What the dyad-decomposable six-bars share: scale, residuals and the input link.
 
@@ -220,7 +219,7 @@ class SixBar(Mechanism):
         return {k: v / s for k, v in out.items()}
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class Watt1(SixBar):
     """Watt I six-bar: a four-bar with a dyad from its crank to its coupler.
 
@@ -313,7 +312,7 @@ class Watt1(SixBar):
             )
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class Watt2(SixBar):
     """Watt II six-bar: two four-bars in series, the second driven by the first one's rocker.
 
@@ -398,7 +397,7 @@ class Watt2(SixBar):
             )
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class Stephenson1(SixBar):
     """Stephenson I six-bar: a four-bar with a dyad from its crank to its rocker.
 
@@ -494,7 +493,7 @@ class Stephenson1(SixBar):
 INPUTS = ("crank", "output")
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class Stephenson3(SixBar):
     """Stephenson III six-bar: a four-bar with a dyad from a coupler point to a ground pivot.
 

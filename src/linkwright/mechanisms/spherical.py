@@ -22,7 +22,6 @@ Frames and letters follow the papers:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -30,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import Fixed, Motion, Plan, SphereCrank, SphereDyad, SphereRigid
 from linkwright.geometry import sphere
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 
 __all__ = ["SphericalFourBar", "SphericalSixBar", "SphericalStephenson3"]
@@ -62,7 +61,7 @@ def _unit_error(motion: Motion) -> Array:
     return np.maximum.reduce(errs)
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class SphericalFourBar(Mechanism):
     """Spherical four-bar in paper 000's frame: frame A0B0 (a1), crank A0A (a2), coupler AB (a3),
     rocker B0B (a4), coupler point P; all arcs in radians.
@@ -137,7 +136,7 @@ class SphericalFourBar(Mechanism):
         }
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class SphericalSixBar(Mechanism):
     """Paper 000's spherical six-bar (Fig. 8): its four-bar, the binary links CE (``link5``) and
     E0E (``link6``), and the point D on CE; all arcs in radians.
@@ -241,7 +240,7 @@ class _InputABPlan:
         )
 
 
-@dataclass(frozen=True)
+@family_dataclass
 class SphericalStephenson3(Mechanism):
     """The Stephenson-III spherical six-bar of paper 001 (Zong et al.); all arcs in radians.
 
