@@ -22,7 +22,6 @@ from linkwright.mechanisms import (
     FAMILIES,
     FourBar,
     GearedFiveBar,
-    SphericalStephenson3,
     input_range,
 )
 from linkwright.plot import animation as animate_module
@@ -212,14 +211,6 @@ def test_mp4_with_ffmpeg(tmp_path: Path) -> None:
         ({"mechanism": NEVER}, "cannot be assembled at any input"),
         ({"mechanism": "crank-rocker.toml"}, "expected a linkwright Mechanism"),
         ({"mechanism": FourBar([0, 0], [4, 0], [1, 1.2], 5, 3.5)}, "batch shape"),
-        (
-            {
-                "mechanism": SphericalStephenson3(
-                    *np.radians([60, 20, 50, 40, 30, 100, 50, 40, 50]), input="FG"
-                )
-            },
-            "cannot be animated",
-        ),
     ],
 )
 def test_bad_requests_are_refused_before_anything_is_written(

@@ -320,8 +320,12 @@ def test_svg_parses_and_draws_the_curves_and_links_where_they_are(exported, name
         if sphere:
             ends = svg_points(link)[[0, -1]] * [1, -1]
         else:
-            ends = np.array([[float(link.get(k)) for k in ("x1", "y1")],
-                             [float(link.get(k)) for k in ("x2", "y2")]]) * [1, -1]  # fmt: skip
+            ends = np.array(
+                [
+                    [float(link.get(k)) for k in ("x1", "y1")],
+                    [float(link.get(k)) for k in ("x2", "y2")],
+                ]
+            ) * [1, -1]
         assert {tuple(np.round(e, 9)) for e in ends} == {
             tuple(np.round(pose[j], 9)) for j in (a, b)
         }
@@ -459,8 +463,10 @@ def test_dxf_audits_clean_and_draws_the_linkage_and_its_curves(exported, name):
         assert min(np.max(np.abs(centre - p)) for p in pose.values()) < 1e-9
 
 
-@pytest.mark.parametrize(("units", "code"), [(None, 0), ("mm", 4), ("cm", 5), ("m", 6),
-                                             ("in", 1), ("ft", 2), ("Inches", 1)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("units", "code"),
+    [(None, 0), ("mm", 4), ("cm", 5), ("m", 6), ("in", 1), ("ft", 2), ("Inches", 1)],
+)
 def test_dxf_insunits_follow_the_documents_units(tmp_path, units, code):
     m = load_example("crank-rocker").mechanism
     path = export(m, tmp_path / "f.dxf", samples=8, units=units)
@@ -490,8 +496,9 @@ def test_random_four_bars_export_to_dxf_with_their_own_lengths(
     assume(min(coupler, rocker, reach) > 0.1 and abs(side) > 1e-3 * coupler * reach)
     P = A + u * (B - A) / coupler + v * np.array([-(B - A)[1], (B - A)[0]]) / coupler
     assume(min(np.linalg.norm(P - A), np.linalg.norm(P - B)) > 1e-3)  # a plate, not a bar
-    m = FourBar(A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v,
-                assembly=np.sign(side))  # fmt: skip
+    m = FourBar(
+        A0=A0, B0=B0, crank=crank, coupler=coupler, rocker=rocker, u=u, v=v, assembly=np.sign(side)
+    )
     path = export(m, tmp_path_factory.mktemp("fb") / "f.dxf", at=theta, samples=12)
     msp = audited(path).modelspace()
     lines = sorted(e.dxf.start.distance(e.dxf.end) for e in msp.query("LINE[layer=='LINKS']"))
@@ -537,11 +544,27 @@ def test_bad_requests_are_refused_with_a_clear_error(tmp_path, kwargs, match):
     assert os.listdir(tmp_path) == []
 
 
-def test_mechanisms_without_a_plan_or_in_a_batch_are_refused(tmp_path):
-    output_driven = Stephenson3(A0=[0, 0], B0=[4, 0], D0=[2, -4], crank=1, coupler=5, rocker=4,
-                                u1=4, v1=-2, link1=3, link2=6, input="output")  # fmt: skip
-    with pytest.raises(ExportError, match="construction plan"):
-        export(output_driven, tmp_path / "x.dxf")
+def test_a_triad_exports_and_batches_are_refused(tmp_path):
+    output_driven = Stephenson3(
+        A0=[0, 0],
+        B0=[4, 0],
+        D0=[2, -4],
+        crank=1,
+        coupler=5,
+        rocker=4,
+        u1=4,
+        v1=-2,
+        link1=3,
+        link2=6,
+        input="output",
+    )
+    # The ternary link ABC is one body, held by three binary links from A0, B0 and D.
+    t = topology(output_driven)
+    assert ("A", "B", "C") in t.links
+    assert {("A0", "A"), ("B0", "B")} <= set(t.links)
+    assert any({"D", "C"} <= set(link) for link in t.links)  # CD carries the point P
+    export(output_driven, tmp_path / "x.dxf")
+    assert (tmp_path / "x.dxf").stat().st_size > 0
     batch = FourBar(A0=[0, 0], B0=[4, 0], crank=[1, 1.5], coupler=5, rocker=3.5)
     with pytest.raises(ExportError, match="batch of 2"):
         export(batch, tmp_path / "x.csv")

@@ -18,8 +18,8 @@ from hypothesis import strategies as st
 
 from linkwright.engine.sphere_triad import sphere_triad_sweep
 from linkwright.mechanisms import SphericalStephenson3
-from linkwright.mechanisms.sphere_configs import triad_of
 from linkwright.papers import p001
+from linkwright.papers.p001_angles import triad_of
 
 DEG = p001.EXAMPLE
 TOL = 1e-12

@@ -25,7 +25,6 @@ from linkwright.mechanisms import (
     circuit,
     solve,
 )
-from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.plot import save_figure
 from linkwright.plot import sphere as sphere_plot
 from linkwright.plot.sphere import (
@@ -176,11 +175,14 @@ def test_default_view_keeps_the_linkage_in_front():
         assert share > 0.95
 
 
-def test_stephenson3_driven_at_fg_has_no_plan_to_draw():
-    with pytest.raises(NoConstructionPlan):
-        plot_spherical_linkage(
-            SphericalStephenson3(*np.radians([60, 20, 50, 40, 30, 100, 50, 40, 50]), input="FG")
-        )
+def test_stephenson3_driven_at_fg_is_drawn_with_its_triad(tmp_path):
+    """Driven at FG the coupler BCE is a triad: drawn as a filled ternary link, on every
+    circuit of every configuration."""
+    m = SphericalStephenson3(*np.radians([60, 20, 50, 40, 30, 100, 50, 40, 50]), input="FG")
+    fig = plot_spherical_linkage(m)
+    save_figure(fig, tmp_path / "fg.png")
+    assert mpimg.imread(tmp_path / "fg.png").shape[0] > 100
+    assert ("C", "B", "E") in m.plan.plates
 
 
 PLANAR = FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=3.5)

@@ -192,8 +192,10 @@ def test_six_bar_dead_centres_of_a_watt_ii_stop_its_output(figures):
 def test_four_bar_dead_centres_property(crank, coupler, rocker, frame, assembly):
     # Random Grashof crank-rockers (crank shortest): each dead centre has crank and coupler in
     # line, |A0 B| = coupler ± crank, one of each.
-    assume(crank + max(coupler, rocker, frame) < sum((coupler, rocker, frame)) - max(
-        coupler, rocker, frame) - 0.05)  # fmt: skip
+    assume(
+        crank + max(coupler, rocker, frame)
+        < sum((coupler, rocker, frame)) - max(coupler, rocker, frame) - 0.05
+    )
     m = FourBar(
         A0=[0, 0], B0=[frame, 0], crank=crank, coupler=coupler, rocker=rocker, assembly=assembly
     )
@@ -216,9 +218,17 @@ def test_six_bar_dead_centres_property(crank, coupler, rocker, link1, link2):
     # Random Watt IIs near the example: at every dead centre found (Brent on the analytic rate),
     # the output D0D's angle differenced from solve() does not move.
     m = Watt2(
-        A0=[0, 0], B0=[4, 0], D0=[5, -2], crank=crank, coupler=coupler, rocker=rocker, u1=4,
-        v1=2, link1=link1, link2=link2,
-    )  # fmt: skip
+        A0=[0, 0],
+        B0=[4, 0],
+        D0=[5, -2],
+        crank=crank,
+        coupler=coupler,
+        rocker=rocker,
+        u1=4,
+        v1=2,
+        link1=link1,
+        link2=link2,
+    )
     feats = _features(m, 60)
     assume(feats.own.circuits)
     dead = feats.of("dead")
@@ -264,8 +274,11 @@ def test_pose_drawn_at_the_chosen_input_is_the_solved_one(name, at):
     fig = plot_mechanism(m, at=at, samples=60)
     ax = fig.axes[0]
     solved = solve(m, [at], order=0).positions
-    drawn = {ln.get_label()[len("_joint ") :]: ln.get_xydata()[0] for ln in ax.lines
-             if ln.get_label().startswith("_joint ")}  # fmt: skip
+    drawn = {
+        ln.get_label()[len("_joint ") :]: ln.get_xydata()[0]
+        for ln in ax.lines
+        if ln.get_label().startswith("_joint ")
+    }
     assert drawn and set(drawn) <= set(solved)
     for joint, xy in drawn.items():
         np.testing.assert_allclose(xy, solved[joint][0], rtol=0, atol=1e-12)
@@ -336,8 +349,11 @@ def test_spherical_map_shows_the_solved_pose_on_lambert_projection():
     c = both.mean(axis=0)
     c /= np.linalg.norm(c)
     solved = solve(m, [at], order=0).positions
-    drawn = {ln.get_label()[len("_joint ") :]: ln.get_xydata()[0] for ln in map_ax.lines
-             if ln.get_label().startswith("_joint ")}  # fmt: skip
+    drawn = {
+        ln.get_label()[len("_joint ") :]: ln.get_xydata()[0]
+        for ln in map_ax.lines
+        if ln.get_label().startswith("_joint ")
+    }
     assert set(drawn) == {"A0", "B0", "A", "B", "P"}
     for joint, xy in drawn.items():
         np.testing.assert_allclose(xy, laea(solved[joint][0], c), rtol=0, atol=1e-12)
@@ -375,10 +391,12 @@ def test_lambert_map_keeps_areas(lat, lon, off, bearing, radius):
     # measured by the shoelace formula, must enclose the same area (a polygon of 4000 sides
     # misses it by ~(2π/4000)²/6 relative).
     c = np.array(
-        [math.cos(math.radians(lat)) * math.cos(math.radians(lon)),
-         math.cos(math.radians(lat)) * math.sin(math.radians(lon)),
-         math.sin(math.radians(lat))]
-    )  # fmt: skip
+        [
+            math.cos(math.radians(lat)) * math.cos(math.radians(lon)),
+            math.cos(math.radians(lat)) * math.sin(math.radians(lon)),
+            math.sin(math.radians(lat)),
+        ]
+    )
     helper = np.array([0.0, 0.0, 1.0]) if abs(c[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
     e1 = np.cross(helper, c)
     e1 /= np.linalg.norm(e1)
@@ -444,28 +462,6 @@ def test_an_input_where_it_does_not_assemble_names_the_range():
             lambda: FourBar(A0=[0, 0], B0=[4, 0], crank=[1.0, 1.5], coupler=5, rocker=3.5),
             "batch",
         ),
-        (
-            lambda: Stephenson3(
-                A0=[0, 0],
-                B0=[4, 0],
-                D0=[2, -4],
-                crank=1,
-                coupler=5,
-                rocker=4,
-                u1=4,
-                v1=-2,
-                link1=3,
-                link2=6,
-                input="output",
-            ),
-            "triad",
-        ),
-        (
-            lambda: SphericalStephenson3(
-                *np.radians([60, 20, 50, 40, 40, 100, 50, 45, 30]), input="FG"
-            ),
-            "triad",
-        ),
     ],
 )
 def test_linkages_that_cannot_be_drawn_are_a_plot_error(make, match):
@@ -474,13 +470,66 @@ def test_linkages_that_cannot_be_drawn_are_a_plot_error(make, match):
 
 
 @pytest.mark.parametrize(
+    "make",
+    [
+        lambda: Stephenson3(
+            A0=[0, 0],
+            B0=[4, 0],
+            D0=[2, -4],
+            crank=1,
+            coupler=5,
+            rocker=4,
+            u1=4,
+            v1=-2,
+            link1=3,
+            link2=6,
+            input="output",
+        ),
+        lambda: SphericalStephenson3(
+            *np.radians([60, 20, 50, 40, 40, 100, 50, 45, 30]), input="FG"
+        ),
+    ],
+    ids=["planar-output", "spherical-fg"],
+)
+def test_linkages_with_a_triad_are_drawn_with_every_circuit(make, tmp_path):
+    """Driven so that a triad remains, every circuit of every configuration is drawn: the
+    ternary link filled, each circuit's limits marked where two poses merge."""
+    m = make()
+    fig = plot_mechanism(m, samples=48)
+    save_figure(fig, tmp_path / "triad.png")
+    assert mpimg.imread(tmp_path / "triad.png").shape[0] > 100
+    features = _features(m, 48)
+    circuits = features.own.circuits
+    assert circuits and all(c.valid.all() for c in circuits)
+    turns = {round(float(mark.theta), 6) for mark in features.of("limit")}
+    # Every turn of a circuit's input is a marked limit, and nothing else is.
+    expected = set()
+    for c in circuits:
+        x = np.unwrap(np.append(c.input, c.input[0]))
+        step = np.sign(np.diff(x))
+        for i in range(len(step)):
+            if step[i] != 0 and step[i - 1] != 0 and step[i] != step[i - 1]:
+                expected.add(round(float(np.angle(np.exp(1j * x[i]))), 6))
+    wrapped = {round(float(np.angle(np.exp(1j * t))), 6) for t in turns}
+    assert expected <= wrapped
+
+
+@pytest.mark.parametrize(
     ("kwargs", "match"),
     [({"at": float("nan")}, "finite"), ({"samples": 3}, "samples"), ({"at": "1"}, "finite")],
 )
 def test_bad_arguments_are_a_plot_error(kwargs, match):
     m = Watt2(
-        A0=[0, 0], B0=[4, 0], D0=[5, -2], crank=1, coupler=5, rocker=4, u1=4, v1=2, link1=3,
+        A0=[0, 0],
+        B0=[4, 0],
+        D0=[5, -2],
+        crank=1,
+        coupler=5,
+        rocker=4,
+        u1=4,
+        v1=2,
+        link1=3,
         link2=6,
-    )  # fmt: skip
+    )
     with pytest.raises(PlotError, match=match):
         plot_mechanism(m, **kwargs)

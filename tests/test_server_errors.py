@@ -10,6 +10,7 @@ server's own state answers for itself (``StatusError``).
 from __future__ import annotations
 
 import logging
+import os
 import subprocess
 from pathlib import Path
 
@@ -125,10 +126,17 @@ def test_every_failed_request_leaves_one_log_line(
 
 def test_make_run_takes_a_port_and_a_host() -> None:
     def command(*args: str) -> str:
+        # Run under `make test`, make would print its Entering/Leaving lines: not wanted here.
+        env = {k: v for k, v in os.environ.items() if k not in ("MAKEFLAGS", "MAKELEVEL", "MFLAGS")}
         out = subprocess.run(
-            ["make", "-n", "run", *args], cwd=ROOT, capture_output=True, text=True, check=True
+            ["make", "--no-print-directory", "-n", "run", *args],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+            env=env,
         ).stdout
-        return out.strip().splitlines()[-1]
+        return next(line for line in out.splitlines() if "linkwright serve" in line).strip()
 
     assert command().endswith("linkwright serve --host 127.0.0.1 --port 8000")
     assert command("PORT=8001").endswith("linkwright serve --host 127.0.0.1 --port 8001")

@@ -590,12 +590,26 @@ def test_every_example_round_trips_through_the_library(client: TestClient, examp
 REFUSED = {"Cc", "Cs", "Zl", "Zp"}
 
 
+# Bidirectional controls (Unicode's Bidi_Control property): they can make a name read as
+# something it is not; and what draws nothing: format marks, combining marks with no base,
+# spaces, and the Hangul and Braille blanks that fonts draw empty.
+BIDI = (
+    set("\u061c\u200e\u200f")
+    | {chr(c) for c in range(0x202A, 0x202F)}
+    | {chr(c) for c in range(0x2066, 0x206A)}
+)
+SHOWS_NOTHING = {"Cf", "Mn", "Me", "Zs"}
+BLANK = set("\u115f\u1160\u3164\uffa0\u2800")
+
+
 def name_rule(text: str) -> str | None:
-    """The issue's naming rule, written out: the stored name, or None if refused."""
+    """The issues' naming rule, written out: the stored name, or None if refused."""
     name = unicodedata.normalize("NFC", text).strip()
     if not 1 <= len(name) <= MAX_NAME:
         return None
-    if any(unicodedata.category(ch) in REFUSED for ch in name):
+    if any(unicodedata.category(ch) in REFUSED or ch in BIDI for ch in name):
+        return None
+    if all(unicodedata.category(ch) in SHOWS_NOTHING or ch in BLANK for ch in name):
         return None
     return name
 

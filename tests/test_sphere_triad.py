@@ -37,14 +37,11 @@ from linkwright.engine.sphere_triad import (
     sphere_triad,
     sphere_triad_sweep,
 )
-from linkwright.mechanisms import SphericalStephenson3, solve
-from linkwright.mechanisms.sphere_configs import (
-    SLOTS,
-    InvalidInputs,
-    paper_angles,
-    solve_all_spherical,
-    triad_of,
-)
+from linkwright.mechanisms import SphericalStephenson3, solve, solve_all
+from linkwright.mechanisms.allconfigs import InvalidInputs
+from linkwright.papers.p001_angles import paper_angles, triad_of
+
+SLOTS = {"AB": 4, "FG": 8}
 
 EXAMPLE = np.radians([115, 105, 110, 90, 80, 70, 65, 85, 25])
 TOL = 1e-12
@@ -372,7 +369,7 @@ def test_eight_real_configurations_of_the_example():
     p = _arcs(EXAMPLE)
     m = SphericalStephenson3(*EXAMPLE, input="FG")
     theta6 = np.radians(280.0)
-    every = solve_all_spherical(m, [theta6])
+    every = solve_all(m, [theta6])
     assert every.driven == "FG" and SLOTS["FG"] == 8
     assert int(every.count[0]) == 8
     pos = {k: v[0] for k, v in every.positions.items()}
@@ -395,7 +392,7 @@ def test_eight_real_configurations_of_the_example():
 
 def test_a_mechanism_with_eight_configurations_at_every_input():
     m = SphericalStephenson3(*np.radians([120, 100, 100, 90, 90, 80, 75, 80, 30]), input="FG")
-    every = solve_all_spherical(m, np.radians(np.arange(0.0, 360.0, 15.0)))
+    every = solve_all(m, np.radians(np.arange(0.0, 360.0, 15.0)))
     assert np.all(every.count == 8)
     assert np.nanmax(every.residual) < TOL
 
@@ -429,7 +426,7 @@ def _feed_back(arcs, theta6, every):
 
 def test_fg_configurations_feed_back_into_the_ab_plan_on_the_example():
     theta6 = np.radians(np.arange(0.0, 360.0, 5.0))
-    every = solve_all_spherical(SphericalStephenson3(*EXAMPLE, input="FG"), theta6)
+    every = solve_all(SphericalStephenson3(*EXAMPLE, input="FG"), theta6)
     assert every.count.max() == 8
     assert _feed_back(EXAMPLE, np.broadcast_to(theta6, every.count.shape), every) < 1e-9
 
@@ -439,7 +436,7 @@ def test_fg_configurations_feed_back_into_the_ab_plan_on_the_example():
 def test_fg_configurations_feed_back_into_the_ab_plan(arcs, sigma, theta6):
     arcs[5] = sigma
     theta6 = np.array(theta6)
-    every = solve_all_spherical(SphericalStephenson3(*arcs, input="FG"), theta6)
+    every = solve_all(SphericalStephenson3(*arcs, input="FG"), theta6)
     assert _feed_back(np.array(arcs), theta6, every) < 1e-9
     p = _arcs(arcs)
     violation = _violation(p, dict(every.positions))
@@ -500,7 +497,7 @@ def test_ab_configurations_match_a_closed_form_count(arcs, sigma, theta1):
         fs, gam2 = _meet(e, np.cos(p["a7"]), g, np.cos(p["a8"]))
         assume(abs(gam2) > 1e-6)
         expected += [np.concatenate((b, c, e, f)) for f in fs]
-    every = solve_all_spherical(SphericalStephenson3(*arcs), [theta1])
+    every = solve_all(SphericalStephenson3(*arcs), [theta1])
     assert every.driven == "AB" and every.count.shape == (1,)
     assert int(every.count[0]) == len(expected) <= SLOTS["AB"]
     found = np.concatenate([every.positions[k][0] for k in "BCEF"], -1)
@@ -537,7 +534,7 @@ def test_every_ab_configuration_is_found_again_driving_fg(arcs, sigma, theta1):
     arcs[5] = sigma
     p = _arcs(arcs)
     _, d, _ = _fixed(p)
-    ab = solve_all_spherical(SphericalStephenson3(*arcs), [theta1])
+    ab = solve_all(SphericalStephenson3(*arcs), [theta1])
     for k in range(int(ab.count[0])):
         b, c, e, f = (ab.positions[j][0, k] for j in "BCEF")
         det, margin = _conditioning(p, b, c, f)
@@ -550,7 +547,7 @@ def test_every_ab_configuration_is_found_again_driving_fg(arcs, sigma, theta1):
         # form_count leaves B = ±D out; test_fg_finds_both_poses_with_b_on_d keeps the rest.
         if np.linalg.norm(np.cross(b, d)) < 1e-6:
             continue
-        fg = solve_all_spherical(SphericalStephenson3(*arcs, input="FG"), [_theta6(p, f)])
+        fg = solve_all(SphericalStephenson3(*arcs, input="FG"), [_theta6(p, f)])
         found = np.concatenate([fg.positions[j][0] for j in "BCEF"], -1)
         gap = np.abs(found - np.concatenate((b, c, e, f))).max(-1)
         assert np.nanmin(gap) < SAME
@@ -568,7 +565,7 @@ def test_fg_finds_both_poses_with_b_on_d():
     arcs[5] = sigma
     p = _arcs(arcs)
     _, d, _ = _fixed(p)
-    ab = solve_all_spherical(SphericalStephenson3(*arcs), [theta1])
+    ab = solve_all(SphericalStephenson3(*arcs), [theta1])
     b, f = ab.positions["B"][0, 0], ab.positions["F"][0, 0]
     assert np.linalg.norm(np.cross(b, d)) < 1e-15
     # C on the circle of arc a4 about D = B, where E·F = cos a7: bracketed on a fine scan.
@@ -580,7 +577,7 @@ def test_fg_finds_both_poses_with_b_on_d():
     h = _e(p, np.broadcast_to(b, c.shape), c) @ f - np.cos(p["a7"])
     roots = c[np.flatnonzero(np.sign(h[1:]) != np.sign(h[:-1]))]
     assert len(roots) == 2
-    fg = solve_all_spherical(SphericalStephenson3(*arcs, input="FG"), [_theta6(p, f)])
+    fg = solve_all(SphericalStephenson3(*arcs, input="FG"), [_theta6(p, f)])
     v = fg.valid[0]
     on_d = np.linalg.norm(np.cross(fg.positions["B"][0][v], d), axis=-1) < 1e-9
     found = fg.positions["C"][0][v][on_d]
@@ -592,7 +589,7 @@ def test_mirror_coupler_doubles_the_ab_count():
     m = SphericalStephenson3(*EXAMPLE)
     mirror = replace(m, sigma=-m.sigma)
     theta = np.radians(np.arange(0.0, 360.0, 2.0))
-    own, other = solve_all_spherical(m, theta), solve_all_spherical(mirror, theta)
+    own, other = solve_all(m, theta), solve_all(mirror, theta)
     assert own.count.max() == 4 and other.count.max() == 4
     assert (own.count + other.count).max() == 8
     # A mirror configuration is never one of the mechanism's: its E is off the coupler.
@@ -610,7 +607,7 @@ def test_mirror_coupler_doubles_the_ab_count():
 @pytest.mark.parametrize("driven", ["AB", "FG"])
 def test_a_linkage_that_cannot_assemble_has_no_configuration(driven):
     short = SphericalStephenson3(*np.radians([90, 10, 20, 30, 30, 90, 40, 50, 40]), input=driven)
-    every = solve_all_spherical(short, np.linspace(-np.pi, np.pi, 7))
+    every = solve_all(short, np.linspace(-np.pi, np.pi, 7))
     assert np.all(every.count == 0) and not every.valid.any()
     for v in (*every.positions.values(), every.residual, every.assembly, every.assembly2):
         assert np.isnan(v).all()
@@ -621,7 +618,7 @@ def test_nan_exactly_where_no_configuration_in_a_batch(driven):
     arcs = np.stack([EXAMPLE, np.radians([90, 10, 20, 30, 30, 90, 40, 50, 40])], -1)
     m = SphericalStephenson3(*arcs, input=driven)
     theta = np.radians(np.arange(0.0, 360.0, 30.0))
-    every = solve_all_spherical(m, theta)
+    every = solve_all(m, theta)
     assert every.valid.shape == (2, 12, SLOTS[driven])
     assert every.positions["E"].shape == (2, 12, SLOTS[driven], 3)
     for v in every.positions.values():
@@ -632,7 +629,7 @@ def test_nan_exactly_where_no_configuration_in_a_batch(driven):
     # Valid slots come first.
     assert np.array_equal(every.valid, np.arange(SLOTS[driven]) < every.count[..., None])
     # The batch row equals the mechanism solved alone.
-    alone = solve_all_spherical(SphericalStephenson3(*EXAMPLE, input=driven), theta)
+    alone = solve_all(SphericalStephenson3(*EXAMPLE, input=driven), theta)
     assert np.array_equal(alone.count, every.count[0])
     assert np.allclose(alone.positions["F"], every.positions["F"][0], atol=1e-15, equal_nan=True)
 
@@ -640,9 +637,9 @@ def test_nan_exactly_where_no_configuration_in_a_batch(driven):
 def test_inputs_with_their_own_batch_axis():
     m = SphericalStephenson3(*np.stack([EXAMPLE, EXAMPLE], -1), input="FG")
     theta = np.radians([[280.0, 100.0], [0.0, 175.0]])
-    every = solve_all_spherical(m, theta)
+    every = solve_all(m, theta)
     assert every.count.shape == (2, 2)
-    one = solve_all_spherical(SphericalStephenson3(*EXAMPLE, input="FG"), theta[1])
+    one = solve_all(SphericalStephenson3(*EXAMPLE, input="FG"), theta[1])
     assert np.array_equal(every.count[1], one.count)
     assert np.allclose(
         paper_angles(m, every)["theta6"][every.valid],
@@ -654,15 +651,15 @@ def test_inputs_with_their_own_batch_axis():
 def test_bad_inputs_raise_clear_errors():
     m = SphericalStephenson3(*EXAMPLE, input="FG")
     with pytest.raises(InvalidInputs, match="1-D"):
-        solve_all_spherical(m, 0.5)
+        solve_all(m, 0.5)
     with pytest.raises(InvalidInputs, match="finite"):
-        solve_all_spherical(m, [0.0, np.nan])
+        solve_all(m, [0.0, np.nan])
     with pytest.raises(InvalidInputs, match="broadcast"):
-        solve_all_spherical(SphericalStephenson3(*np.stack([EXAMPLE] * 2, -1)), np.zeros((3, 4)))
-    with pytest.raises(TypeError, match="SphericalStephenson3"):
-        from linkwright.mechanisms import SphericalFourBar
+        solve_all(SphericalStephenson3(*np.stack([EXAMPLE] * 2, -1)), np.zeros((3, 4)))
+    # Any family is answered: a spherical four-bar has its two assembly modes.
+    from linkwright.mechanisms import SphericalFourBar
 
-        solve_all_spherical(SphericalFourBar(*np.radians([40, 20, 45, 35])), [0.0])
+    assert solve_all(SphericalFourBar(*np.radians([40, 20, 45, 35])), [0.0]).count[0] == 2
     args = list(triad_of(m, 0.3))
     for index, value, words in [
         (0, np.eye(3) * 2, "orthonormal"),

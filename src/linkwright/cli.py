@@ -453,16 +453,23 @@ def _solve_triad(
     :data:`TRIAD_RULE`)."""
     import numpy as np
 
+    from linkwright.engine import evaluate
     from linkwright.mechanisms import solve_all
 
-    if derivatives:
-        raise CliError(
-            "--derivatives: not available yet for a linkage driven so that a triad remains "
-            f'({doc.family} with input = "{doc.mechanism.input}"); solve without it for the '
-            "positions"
-        )
     mech = doc.mechanism
     found = solve_all(mech, theta)
+    rates = None
+    if derivatives:
+        # Each configuration solved again on its own branches (a triad's pose index, a dyad's
+        # sign), with the derivatives of its differentiated constraints.
+        rates = evaluate(
+            mech.plan,
+            mech.params(),
+            np.broadcast_to(np.asarray(theta)[:, None], found.valid.shape),
+            points=mech.points,
+            branches=found.branches,
+            order=2,
+        )
     wanted = (int(np.asarray(mech.assembly)), int(np.asarray(mech.assembly2)))
     joints = mech.reported_joints
     samples = []
@@ -471,13 +478,15 @@ def _solve_triad(
         for k in range(found.valid.shape[-1]):
             if not bool(found.valid[i, k]):
                 continue
-            entries.append(
-                {
-                    "assembly": [int(found.assembly[i, k]), int(found.assembly2[i, k])],
-                    "residual": float(found.residual[i, k]),
-                    "joints": {j: _xy(found.positions[j][i, k]) for j in joints},
-                }
-            )
+            entry: dict[str, Any] = {
+                "assembly": [int(found.assembly[i, k]), int(found.assembly2[i, k])],
+                "residual": float(found.residual[i, k]),
+                "joints": {j: _xy(found.positions[j][i, k]) for j in joints},
+            }
+            if rates is not None:
+                entry["velocity"] = {j: _xy(rates.velocities[j][i, k]) for j in joints}
+                entry["acceleration"] = {j: _xy(rates.accelerations[j][i, k]) for j in joints}
+            entries.append(entry)
         sample: dict[str, Any] = {"input_deg": float(deg), "configurations": entries}
         if own:
             # A sign of 0 is a configuration exactly at that dyad's limit: both branches meet.
@@ -655,9 +664,11 @@ def curve_document(doc: Document, points: int = 360, *, spacing: str = "input") 
     if not bool(np.any(motion.valid)):
         raise CliError(f"{doc.family}: the linkage cannot be assembled at any input")
     joint = mech.traced_joint
-    dyads = mech.plan.dyads
-    if dyads:
-        branch = np.broadcast_to(motion.branches[dyads[0].name], motion.input.shape)
+    # The first branching step's label: a dyad's sign, a triad's closure sign (both change
+    # only at a limit position).
+    first = next(iter(motion.labels), None)
+    if first is not None:
+        branch = np.broadcast_to(motion.labels[first], motion.input.shape)
     else:
         branch = np.ones(motion.input.shape)
     return {

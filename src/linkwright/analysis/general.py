@@ -16,6 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from linkwright.engine import DyadRRP, DyadRRR, Motion, SphereDyad, input_turns
+from linkwright.engine.continuation import every_circuit
+from linkwright.engine.plan import placed_joints
 from linkwright.geometry import plane, sphere
 from linkwright.mechanisms.base import Mechanism, circuit, input_range
 
@@ -108,7 +110,9 @@ def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> di
 
     Keys: ``family``, ``assembles``, ``period_turns`` (input turns before the linkage repeats),
     ``input_turns_fully``, ``input_arcs_deg`` (absolute input angles), ``limit_positions``
-    (each ``{"input_deg", "dyad"}``: exact roots, the dyad that reaches its limit there),
+    (each ``{"input_deg", "dyad"}``: exact roots, the dyad that reaches its limit there; for a
+    linkage with a triad every limit of every circuit, ``{"input_deg", "triad", "circuit",
+    "poses"}``: the two pose indices that merge there, as the circuit arrives and leaves),
     ``transmission_angle_deg`` (per dyad: ``min``, ``max`` over the circuit),
     ``traced`` (per traced joint: ``path_length``, ``speed_min``, ``speed_max`` per radian of
     input) and ``samples`` (how many circuit samples the extremes were read from: they are
@@ -137,8 +141,29 @@ def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> di
         for lo, hi, dl, dh in finite
         for x, d in ((lo, dl), (hi, dh))
     ]
+    if plan.triads:
+        # A triad's configurations are followed: every limit of every circuit, where two of
+        # its poses merge (the circuit may turn there more often than at its arc's ends).
+        found = every_circuit(plan, mechanism.params(), 360, points=mechanism.points, order=0)
+        report["circuits"] = len(found)
+        report["limit_positions"] = [
+            {
+                "input_deg": _deg(limit.input),
+                "triad": "".join(placed_joints(triad)),
+                "circuit": k,
+                "poses": [int(limit.before[triad.name]), int(limit.after[triad.name])],
+            }
+            for k, c in enumerate(found)
+            for limit in c.limits
+            for triad in plan.triads
+            if limit.before[triad.name] != limit.after[triad.name]
+        ]
     if arcs.never:
-        report["reason"] = "some dyad cannot close at any input"
+        report["reason"] = (
+            "some dyad cannot close at any input"
+            if not plan.triads
+            else plan.triads[0].unassembled().replace("at this input", "at any input")
+        )
         report["transmission_angle_deg"] = {d.name: {"min": None, "max": None} for d in dyads}
         report["traced"] = {
             j: {"path_length": None, "speed_min": None, "speed_max": None} for j in plan.traced

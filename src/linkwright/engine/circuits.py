@@ -20,12 +20,14 @@ along the joints' paths (``spacing="path"``: for motion that concentrates near a
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import crossings
+from linkwright.engine.arcs import TWO_PI, InputArcs
+from linkwright.engine.continuation import arcs_of, every_circuit
 from linkwright.engine.crossings import LIMIT, PLAIN
 from linkwright.engine.evaluate import Motion, batch_shape, evaluate, place_all
 from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, SphereCrank
@@ -34,33 +36,8 @@ from linkwright.geometry import plane
 __all__ = ["InputArcs", "NoPeriod", "input_arcs", "input_turns", "trace"]
 
 Array = NDArray[np.float64]
-TWO_PI = 2.0 * np.pi
 GRID = 1440
 BISECTIONS = 64
-
-
-@dataclass(frozen=True)
-class InputArcs:
-    """The admissible inputs of a batch of linkages with their assembly held fixed.
-
-    ``full`` marks linkages whose input turns fully, ``never`` those that assemble nowhere. Else
-    ``lo``/``hi`` (shape ``batch + (K,)``, NaN-padded, ``lo`` in (−π, −π + period], ``hi > lo``)
-    are the arcs, and ``dyad_lo``/``dyad_hi`` the index (into ``plan.dyads``) of the dyad at its
-    limit there (−1 in padding). ``period`` is how far the input turns before the linkage
-    repeats: 2π, or 2πq for a linkage geared at a ratio p/q (see :func:`input_turns`).
-    """
-
-    full: NDArray[np.bool_]
-    never: NDArray[np.bool_]
-    lo: Array
-    hi: Array
-    dyad_lo: NDArray[np.int64]
-    dyad_hi: NDArray[np.int64]
-    period: Array | float = TWO_PI
-
-    @property
-    def count(self) -> NDArray[np.int64]:
-        return np.sum(np.isfinite(self.lo), axis=-1)
 
 
 def _is_ground(plan: Plan, name: str) -> bool:
@@ -442,6 +419,13 @@ def input_arcs(
     """
     dyads = plan.dyads
     turns = input_turns(plan, params, points=points)
+    if plan.triads:
+        # A triad's poses are followed from sample to sample, not held: the arcs of every
+        # circuit of every configuration (one linkage at a time).
+        found = every_circuit(
+            plan, params, 90, points=points, order=0, period=TWO_PI * float(np.max(turns))
+        )
+        return replace(arcs_of(found, batch_shape(params, points)), period=TWO_PI * turns)
     if not dyads:
         shape = batch_shape(params, points)
         nanpad = np.full(shape + (1,), np.nan)
@@ -598,6 +582,23 @@ def trace(
     ...
     ValueError: spacing must be one of 'input', 'path', got 'arc'
     """
+    if plan.triads:
+        # A triad's configurations are followed by continuation: every circuit of every one.
+        found = every_circuit(
+            plan,
+            params,
+            samples,
+            points=points,
+            order=order,
+            spacing=spacing,
+            period=TWO_PI * float(np.max(input_turns(plan, params, points=points))),
+        )
+        arcs_of(found, batch_shape(params, points))  # one linkage at a time
+        if not 0 <= circuit < len(found):
+            raise ValueError(
+                f"circuit: {circuit} is not one of the linkage's {len(found)} circuits"
+            )
+        return found[circuit].motion
     if samples < 2:
         raise ValueError("a circuit needs at least 2 samples")
     if spacing not in SPACINGS:
@@ -1229,4 +1230,5 @@ def _restrict(motion: Motion, keep: NDArray[np.bool_]) -> Motion:
         regular=regular,
         branches=motion.branches,
         margins=motion.margins,
+        labels=motion.labels,
     )

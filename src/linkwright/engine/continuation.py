@@ -34,10 +34,11 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linear_sum_assignment
 
-from linkwright.engine.evaluate import Motion, evaluate
+from linkwright.engine.arcs import InputArcs
+from linkwright.engine.evaluate import Motion, batch_shape, evaluate
 from linkwright.engine.plan import DYAD_TYPES, Fixed, Plan
 
-__all__ = ["Circuit", "Limit", "every_circuit", "every_configuration"]
+__all__ = ["Circuit", "Limit", "arcs_of", "every_circuit", "every_configuration"]
 
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
@@ -102,11 +103,12 @@ def every_configuration(
     points: frozenset[str] = frozenset(),
     order: int = 2,
 ) -> tuple[list[dict[str, float]], Motion]:
-    """Every combination of branch values, solved at ``inputs`` for one mechanism.
+    """Every combination of branch values, solved at ``inputs`` for a batch of mechanisms.
 
-    Returns the combinations (step name → branch value) and one :class:`Motion` whose leading
-    axis runs over them (its ``valid`` says which are real at each input). Two combinations can
-    describe one configuration only at a limit position, where two branches meet.
+    Returns the combinations (step name → branch value: a dyad's sign, a triad's pose index) and
+    one :class:`Motion` whose leading axis runs over them, before the batch's and the samples'
+    (its ``valid`` says which are real at each input). Two combinations can describe one
+    configuration only at a limit position, where two branches meet.
 
     Examples
     --------
@@ -126,12 +128,14 @@ def every_configuration(
         for values in itertools.product(*(vals for _, vals in steps))
     ]
     theta = np.atleast_1d(np.asarray(inputs, dtype=float))
-    count = len(combos)
-    branches = {name: np.array([c[name] for c in combos])[:, None] for name, _ in steps}
+    # The combinations form a new leading axis, before the batch's and the samples'.
+    shape = np.broadcast_shapes(batch_shape(params, points) + (1,), theta.shape)
+    lead = (len(combos),) + (1,) * len(shape)
+    branches = {name: np.array([c[name] for c in combos]).reshape(lead) for name, _ in steps}
     motion = evaluate(
         plan,
         params,
-        np.broadcast_to(theta, (count,) + theta.shape),
+        np.broadcast_to(theta, (len(combos),) + shape),
         points=points,
         branches=branches,
         order=order,
@@ -344,6 +348,35 @@ def _cycles(
     return cycles
 
 
+def arcs_of(found: list[Circuit], shape: tuple[int, ...] = ()) -> InputArcs:
+    """The input's arcs of one linkage with a triad, from its circuits: each rocking circuit's
+    range of inputs (its lower end in (−π, π]); ``full`` where every circuit turns fully;
+    ``never`` where there is none. The configurations are followed, not the assembly held, so
+    the arcs of several circuits may overlap."""
+    if shape:
+        raise ValueError(
+            "the circuits of a linkage with a triad are traced one mechanism at a time: index "
+            "the batch (mechanism[i])"
+        )
+    rocking = [c for c in found if not c.full]
+    lo, hi = [], []
+    for c in rocking:
+        x = np.unwrap(c.motion.input)
+        shift = TWO_PI * np.ceil((x.min() - np.pi) / TWO_PI)  # the lower end into (−π, π]
+        lo.append(x.min() - shift)
+        hi.append(x.max() - shift)
+    width = max(len(rocking), 1)
+    pad = np.full(width, np.nan)
+    return InputArcs(
+        full=np.array(bool(found) and not rocking),
+        never=np.array(not found),
+        lo=np.array(lo) if rocking else pad,
+        hi=np.array(hi) if rocking else pad,
+        dyad_lo=np.full(width, -1),
+        dyad_hi=np.full(width, -1),
+    )
+
+
 def every_circuit(
     plan: Plan,
     params: Mapping[str, ArrayLike],
@@ -353,12 +386,13 @@ def every_circuit(
     order: int = 2,
     period: float = TWO_PI,
     grid: int = GRID,
+    spacing: str = "input",
 ) -> list[Circuit]:
     """Every closed circuit of one mechanism, over all its configurations (module docstring).
 
-    Each circuit has about ``samples`` samples, its limit positions among them exactly; the
-    input is spaced evenly between limits. Circuits come in the order of the lowest input they
-    reach.
+    Each circuit has about ``samples`` samples, its limit positions among them; the input is
+    spaced evenly between limits (``spacing="input"``), or the joints' travel is
+    (``spacing="path"``). Circuits come in the order of the lowest input they reach.
 
     Examples
     --------
@@ -382,7 +416,7 @@ def every_circuit(
     solver.scale = max(float(spread.max()) if spread.size else 1.0, 1e-300)
     first, wrap, joins, turns = _graph(solver, grid_theta, period)
     cycles = _cycles(first, wrap, joins, turns, period)
-    return [_resample(solver, c, samples, order, period) for c in cycles]
+    return [_resample(solver, c, samples, order, period, spacing) for c in cycles]
 
 
 def _unwrapped(cycle, period: float) -> tuple[Array, list[int]]:
@@ -397,46 +431,65 @@ def _unwrapped(cycle, period: float) -> tuple[Array, list[int]]:
     return out, turn_at
 
 
-def _resample(solver: _Solver, cycle, samples: int, order: int, period: float) -> Circuit:
+def _resample(
+    solver: _Solver, cycle, samples: int, order: int, period: float, spacing: str = "input"
+) -> Circuit:
+    """The cycle's nodes resampled to about ``samples`` inputs: every limit a sample, each
+    segment between limits (or the whole turn) sampled evenly in the input (sin² spacing
+    between limits, as :func:`~linkwright.engine.circuits.trace`), or with ``spacing="path"``
+    evenly in the joints' travel; each sample solved on the configuration followed."""
     theta, turn_at = _unwrapped(cycle, period)
     combos = [c for _, c, _ in cycle]
     x = np.stack([s.x[c] for s, c, _ in cycle])
     labels = np.array([s.label[c] for s, c, _ in cycle])
-    # A turn is the pair (k-1, k) at one input: keep the node before it as the limit sample.
-    bounds = [0, *[k for k in turn_at], len(cycle)]
+    # A turn is the pair (k-1, k) at one input: the node after it starts the next segment.
+    bounds = [0, *turn_at, len(cycle)]
     segments = [
         (bounds[i], bounds[i + 1]) for i in range(len(bounds) - 1) if bounds[i + 1] > bounds[i]
     ]
-    travel = np.array([abs(theta[e - 1] - theta[s]) for s, e in segments])
-    closing = abs(theta[-1] - theta[0]) if not turn_at else 0.0
-    total = float(travel.sum() + closing) or 1.0
-    want_theta, want_x, want_label = [], [], []
-    for (s, e), length in zip(segments, travel, strict=True):
-        last = e == len(cycle)
-        count = max(2, round(samples * (length + (closing if last else 0.0)) / total))
-        seg_theta = theta[s:e]
-        seg_x = x[s:e]
-        if last and not turn_at:
+    pieces = []
+    for s, e in segments:
+        seg_theta, seg_x = theta[s:e], x[s:e]
+        if not turn_at:
             # A circuit without limits closes where it started, a whole period on.
             seg_theta = np.append(seg_theta, theta[0] + np.sign(theta[-1] - theta[0]) * period)
             seg_x = np.vstack((seg_x, x[:1]))
-            t = np.arange(count) / count
-            target = seg_theta[0] + (seg_theta[-1] - seg_theta[0]) * t
+        elif e < len(cycle):
+            # A segment ends at the next limit, the first node of the next segment.
+            seg_theta = np.append(seg_theta, theta[e])
+            seg_x = np.vstack((seg_x, x[e]))
         else:
-            t = np.arange(count) / count
-            target = seg_theta[0] + (seg_theta[-1] - seg_theta[0]) * np.sin(0.5 * np.pi * t) ** 2
-        rising = seg_theta[-1] >= seg_theta[0]
-        order_idx = np.argsort(seg_theta) if rising else np.argsort(-seg_theta)
-        st, sx = seg_theta[order_idx], seg_x[order_idx]
-        key = st if rising else -st
-        tk = target if rising else -target
-        pos = np.clip(np.searchsorted(key, tk, side="right") - 1, 0, len(st) - 1)
-        nxt = np.minimum(pos + 1, len(st) - 1)
-        span = np.where(nxt > pos, st[nxt] - st[pos], 1.0)
-        w = np.where(nxt > pos, (target - st[pos]) / span, 0.0)[:, None]
-        want_x.append((1 - w) * sx[pos] + w * sx[nxt])
-        want_theta.append(target)
-        want_label.append(np.full(count, labels[s]))
+            # The last segment ends where the circuit started, at the same input modulo the
+            # period (a circuit may come back a whole turn on).
+            gap = theta[0] - theta[-1]
+            seg_theta = np.append(seg_theta, theta[-1] + gap - period * np.round(gap / period))
+            seg_x = np.vstack((seg_x, x[:1]))
+        # The travel along the segment: the largest joint coordinate's chord at each step.
+        walked = np.concatenate(([0.0], np.cumsum(np.max(np.abs(np.diff(seg_x, axis=0)), -1))))
+        pieces.append((seg_theta, seg_x, walked, labels[s]))
+    if spacing == "path":
+        measure = np.array([p[2][-1] for p in pieces])
+    else:
+        measure = np.array([abs(p[0][-1] - p[0][0]) for p in pieces])
+    total = float(measure.sum()) or 1.0
+    want_theta, want_x, want_label = [], [], []
+    for (seg_theta, seg_x, walked, label), size in zip(pieces, measure, strict=True):
+        count = max(2, round(samples * size / total))
+        t = np.arange(count) / count
+        if spacing == "path" and walked[-1] > 0:
+            along = walked  # evenly in the travel
+            goal = walked[-1] * t
+        else:
+            along = np.abs(seg_theta - seg_theta[0])
+            ease = t if not turn_at else np.sin(0.5 * np.pi * t) ** 2
+            goal = along[-1] * ease
+        # Interpolate input and position at each goal along the (monotone) measure.
+        k = np.clip(np.searchsorted(along, goal, side="right") - 1, 0, len(along) - 2)
+        span = along[k + 1] - along[k]
+        w = np.where(span > 0, (goal - along[k]) / np.where(span > 0, span, 1.0), 0.0)
+        want_theta.append(seg_theta[k] + w * (seg_theta[k + 1] - seg_theta[k]))
+        want_x.append((1 - w)[:, None] * seg_x[k] + w[:, None] * seg_x[k + 1])
+        want_label.append(np.full(count, label))
     target_theta = np.concatenate(want_theta)
     target_x = np.concatenate(want_x)
     target_label = np.concatenate(want_label)

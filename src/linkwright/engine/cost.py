@@ -467,8 +467,8 @@ def check_gear(shape: Shape, whose: str = "the ") -> None:
     starts the message (``"step 3's "``; by default "the")."""
     if shape.gear > GEAR_TURNS.value:
         raise CostError(
-            f"too costly: {whose}gear ratio turns a crank {shape.gear:,.6g} times per input "
-            "turn; "
+            f"too costly: {whose}gear ratio {shape.gear:g} turns a crank {shape.gear:,.6g} "
+            "times per input turn; "
             f"circuits can be traced up to {GEAR_TURNS.value:.0f} (the limit search samples "
             f"1,440 inputs a turn); lower the ratio to {GEAR_TURNS.value:.0f} or less"
         )

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine.plan import JointState, Param, Plan
 
-__all__ = ["Motion", "evaluate", "place_all"]
+__all__ = ["Motion", "evaluate", "place_all", "take"]
 
 Array = NDArray[np.float64]
 
@@ -29,8 +29,12 @@ class Motion:
     positions, velocities, accelerations : joint name → array.
     valid : the linkage is assembled at this sample.
     regular : the derivatives exist (the sample is not a singular position).
-    branches : dyad joint name → the branch sign used at each sample.
-    margins : dyad joint name → normalised discriminant (0 at that dyad's limit position).
+    branches : dyad joint name → the branch sign used at each sample (a triad's joints: the
+        pose index used).
+    margins : dyad joint name → normalised discriminant (0 at that dyad's limit position); a
+        triad's joints: its signed closure.
+    labels : joint name → the branch's label, which changes along a circuit only at a limit
+        position (a dyad's sign; a triad's closure sign): where faces find a circuit's legs.
     """
 
     input: Array
@@ -41,6 +45,7 @@ class Motion:
     regular: NDArray[np.bool_]
     branches: dict[str, Array] = field(default_factory=dict)
     margins: dict[str, Array] = field(default_factory=dict)
+    labels: dict[str, Array] = field(default_factory=dict)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -92,6 +97,32 @@ class _Context:
         if side is None:
             return None
         return np.broadcast_to(np.asarray(side, dtype=float), self._theta.shape)
+
+
+def take(motion: Motion, index: object) -> Motion:
+    """The motion of the batch entries at ``index`` (over the leading axes of ``input``): every
+    array indexed alike, the samples' axis and the coordinates' kept.
+
+    >>> m = Motion(np.zeros((3, 5)), {"A": np.ones((3, 5, 2))}, None, None,
+    ...            np.ones((3, 5), bool), np.ones((3, 5), bool))
+    >>> take(m, 1).input.shape, take(m, slice(0, 2)).positions["A"].shape
+    ((5,), (2, 5, 2))
+    """
+
+    def pick(arrays: dict[str, Array] | None) -> dict[str, Array] | None:
+        return None if arrays is None else {k: v[index] for k, v in arrays.items()}  # type: ignore[index]
+
+    return Motion(
+        input=motion.input[index],  # type: ignore[index]
+        positions=pick(motion.positions) or {},
+        velocities=pick(motion.velocities),
+        accelerations=pick(motion.accelerations),
+        valid=motion.valid[index],  # type: ignore[index]
+        regular=motion.regular[index],  # type: ignore[index]
+        branches=pick(motion.branches) or {},
+        margins=pick(motion.margins) or {},
+        labels=pick(motion.labels) or {},
+    )
 
 
 def batch_shape(params: Mapping[str, ArrayLike], points: frozenset[str]) -> tuple[int, ...]:
@@ -188,4 +219,9 @@ def evaluate(
         regular=regular,
         branches={k: s.branch for k, s in states.items() if s.branch is not None},
         margins={k: s.margin for k, s in states.items() if s.margin is not None},
+        labels={
+            k: s.branch if s.label is None else s.label
+            for k, s in states.items()
+            if s.branch is not None
+        },
     )

@@ -17,6 +17,7 @@ sphere (joints are unit vectors, the axes of the revolute joints) a dyad joint X
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -75,7 +76,10 @@ class JointState:
     margin: Array | None = None
     """For dyads: the normalised discriminant (≥ 0 where the dyad closes; 0 at a limit)."""
     branch: Array | None = None
-    """For dyads: the branch sign used at each sample."""
+    """For dyads: the branch sign used at each sample (for a triad: its pose index)."""
+    label: Array | None = None
+    """The branch's label that changes only at a limit position: a dyad's sign (its
+    ``branch``, when left None), a triad's closure sign (its pose index does not)."""
 
 
 class Context(Protocol):
@@ -96,6 +100,8 @@ class Step(Protocol):
     @property
     def parents(self) -> tuple[str, ...]: ...
 
+    def links(self) -> tuple[tuple[str, str], ...]: ...
+    def plates(self) -> tuple[tuple[str, ...], ...]: ...
     def place(self, ctx: Context) -> JointState | dict[str, JointState]:
         """The state of the joint the step places (of each joint, for a triad)."""
         ...
@@ -126,6 +132,14 @@ class Fixed:
     def parents(self) -> tuple[str, ...]:
         return ()
 
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ()
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ()
+
     def place(self, ctx: Context) -> JointState:
         at = ctx.point(self.at)
         # A point [x, y] in the plane, a unit vector [x, y, z] on the sphere.
@@ -148,6 +162,14 @@ class Crank:
     @property
     def parents(self) -> tuple[str, ...]:
         return (self.pivot,)
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ((self.pivot, self.name),)
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ()
 
     def place(self, ctx: Context) -> JointState:
         o = ctx.joint(self.pivot)
@@ -179,6 +201,19 @@ class DyadRRR:
     @property
     def parents(self) -> tuple[str, ...]:
         return (self.p1, self.p2)
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ((self.p1, self.name), (self.p2, self.name))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ()
+
+    def branch_of(self, positions: Mapping[str, Array], params: Mapping[str, Array]) -> Array:
+        """The branch a placed joint is on, read off positions: sign((P2 − P1) × (P − P1))."""
+        p1, p2 = positions[self.p1], positions[self.p2]
+        return np.sign(plane.cross(p2 - p1, positions[self.name] - p1))
 
     def place(self, ctx: Context) -> JointState:
         j1, j2 = ctx.joint(self.p1), ctx.joint(self.p2)
@@ -251,6 +286,22 @@ class DyadRRP:
     def parents(self) -> tuple[str, ...]:
         return (self.p1, self.line_point)
 
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ((self.p1, self.name),)
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ()
+
+    def branch_of(self, positions: Mapping[str, Array], params: Mapping[str, Array]) -> Array:
+        """The branch a placed pin is on, read off positions: sign((B − H)·d), H the foot of
+        P1 on the guide and d its direction."""
+        angle = params[self.line_angle] if isinstance(self.line_angle, str) else self.line_angle
+        d = np.stack(np.broadcast_arrays(np.cos(angle), np.sin(angle)), axis=-1)
+        along = positions[self.name] - positions[self.p1]
+        return np.sign(plane.dot(along, d))
+
     def place(self, ctx: Context) -> JointState:
         j1, jl = ctx.joint(self.p1), ctx.joint(self.line_point)
         r = ctx.scalar(self.r)
@@ -302,6 +353,14 @@ class Rigid:
     def parents(self) -> tuple[str, ...]:
         return (self.origin, self.toward)
 
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ((self.origin, self.name), (self.toward, self.name))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ((self.origin, self.toward, self.name),)
+
     def place(self, ctx: Context) -> JointState:
         jo, jt = ctx.joint(self.origin), ctx.joint(self.toward)
         u, v = ctx.scalar(self.u), ctx.scalar(self.v)
@@ -346,6 +405,14 @@ class Trammel:
     @property
     def parents(self) -> tuple[str, ...]:
         return (self.guide1, self.guide2)
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ()
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ()
 
     def place(self, ctx: Context) -> JointState:
         g1, g2 = ctx.joint(self.guide1), ctx.joint(self.guide2)
@@ -393,6 +460,14 @@ class SphereCrank:
     @property
     def parents(self) -> tuple[str, ...]:
         return (self.pivot,)
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ((self.pivot, self.name),)
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ()
 
     def place(self, ctx: Context) -> JointState:
         o = ctx.joint(self.pivot)
@@ -443,6 +518,19 @@ class SphereDyad:
     @property
     def parents(self) -> tuple[str, ...]:
         return (self.p1, self.p2)
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ((self.p1, self.name), (self.p2, self.name))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ()
+
+    def branch_of(self, positions: Mapping[str, Array], params: Mapping[str, Array]) -> Array:
+        """The branch a placed joint is on, read off positions: sign((P1 × P2)·X)."""
+        w = sphere.cross(positions[self.p1], positions[self.p2])
+        return np.sign(sphere.dot(w, positions[self.name]))
 
     def place(self, ctx: Context) -> JointState:
         j1, j2 = ctx.joint(self.p1), ctx.joint(self.p2)
@@ -530,6 +618,14 @@ class SphereRigid:
     @property
     def parents(self) -> tuple[str, ...]:
         return (self.origin, self.toward)
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The links a drawing shows for this step, as pairs of joints."""
+        return ((self.origin, self.name), (self.toward, self.name))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The rigid bodies of three joints or more that this step makes, to fill."""
+        return ((self.origin, self.toward, self.name),)
 
     def place(self, ctx: Context) -> JointState:
         jo, jt = ctx.joint(self.origin), ctx.joint(self.toward)
@@ -652,6 +748,21 @@ class Plan:
     def triads(self) -> tuple[Step, ...]:
         """The steps that place several joints at once, each on one of several poses."""
         return tuple(s for s in self.steps if hasattr(s, "max_poses"))
+
+    @property
+    def ground(self) -> tuple[str, ...]:
+        """The ground pivots."""
+        return tuple(s.name for s in self.steps if isinstance(s, Fixed))
+
+    @property
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """Every link a drawing shows, as pairs of joints, from the steps that make them."""
+        return tuple(pair for s in self.steps for pair in s.links())
+
+    @property
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """Every rigid body of three joints or more, to fill in a drawing."""
+        return tuple(plate for s in self.steps for plate in s.plates())
 
     def step(self, name: str) -> Step:
         """The step that places joint ``name``."""

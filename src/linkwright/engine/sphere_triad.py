@@ -526,7 +526,7 @@ def sphere_triad(
     paper 001's θ1 = ∠BAD and θ4 = ∠CDG.
 
     >>> from linkwright.mechanisms import SphericalStephenson3
-    >>> from linkwright.mechanisms.sphere_configs import triad_of
+    >>> from linkwright.papers.p001_angles import triad_of
     >>> m = SphericalStephenson3(*np.radians([115, 105, 110, 90, 80, 70, 65, 85, 25]))
     >>> poses = sphere_triad(*triad_of(m, np.radians(280.0)))
     >>> int(poses.count), bool(poses.residual.max() < 1e-14)
@@ -617,7 +617,7 @@ def sphere_triad_sweep(
     Examples
     --------
     >>> from linkwright.mechanisms import SphericalStephenson3
-    >>> from linkwright.mechanisms.sphere_configs import triad_of
+    >>> from linkwright.papers.p001_angles import triad_of
     >>> m = SphericalStephenson3(*np.radians([115, 105, 110, 90, 80, 70, 65, 85, 25]))
     >>> swept = sphere_triad_sweep(*triad_of(m, np.radians(280.0)))
     >>> poly = sphere_triad(*triad_of(m, np.radians(280.0)))

@@ -188,6 +188,7 @@ def _states(
             regular,
             margin=closure,
             branch=slot,
+            label=np.where(closure >= 0, 1.0, -1.0),
         )
         for k, name in enumerate(step.joints)
     }
@@ -216,6 +217,15 @@ class _TriadStep:
     @property
     def parents(self) -> tuple[str, ...]:
         return tuple(dict.fromkeys(self.anchors))
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The three binary links and the ternary's three sides."""
+        j, k = self.joints, self.anchors
+        return ((k[0], j[0]), (k[1], j[1]), (k[2], j[2]), (j[0], j[1]), (j[1], j[2]), (j[0], j[2]))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        """The ternary link."""
+        return (self.joints,)
 
     @property
     def body(self) -> tuple[Param, Param, Param]:
@@ -380,8 +390,9 @@ class SphereTriad(_TriadStep):
     J2 lies at arc ``side`` from J1, and J3 at arc ``arc`` from J1, turned by ``angle`` from the
     great circle J1→J2 (right-handed about +O·J1, as :class:`~linkwright.engine.SphereRigid`
     places a point); link k has arc ``lengths[k]``. The branch parameter ``pose`` is the pose
-    index, 0 to 7, in the order of J2's angle on its circle about K2, measured right-handed
-    from the great circle K2→K1 (:func:`linkwright.engine.sphere_triad.sphere_triad`).
+    index, 0 to 7, in the order of J2's angle on its circle about K2, measured from the great
+    circle K2→K1, right-handed about +O·K2 (``sense = 1``) or left-handed (``sense = -1``), in
+    (−π, π] (:func:`linkwright.engine.sphere_triad.sphere_triad`).
     """
 
     joints: tuple[str, str, str]
@@ -391,6 +402,7 @@ class SphereTriad(_TriadStep):
     arc: Param
     angle: Param
     pose: str = "pose"
+    sense: float = 1.0
 
     max_poses = SPHERE_POSES
     space = "sphere"
@@ -407,7 +419,9 @@ class SphereTriad(_TriadStep):
             np.isfinite(anchors).all(axis=(-1, -2))[..., None, None], anchors, np.eye(3)
         )
         frame_c = circle_frame(safe[..., 0, :], _reference(safe[..., 0, :], safe[..., 1, :]))
-        frame_b = circle_frame(safe[..., 1, :], _reference(safe[..., 1, :], safe[..., 0, :]))
+        frame_b = circle_frame(
+            safe[..., 1, :], _reference(safe[..., 1, :], safe[..., 0, :]), self.sense
+        )
 
         # The solver's B is our J2 (its poses come sorted by B's angle) and its C our J1, from
         # which E = J3 is placed towards B.

@@ -360,6 +360,16 @@ def _parse_sign(value: Any, path: str) -> int:
     return int(x)
 
 
+def _parse_pose(value: Any, path: str) -> int:
+    x = _number(value, path, "a whole number from 0")
+    if x != int(x) or not 0 <= x <= 7:
+        raise DocumentError(
+            path,
+            f"must be a whole number from 0 to 7 (a triad's pose index), got {_show(value)}",
+        )
+    return int(x)
+
+
 def _parse_uv(value: Any, path: str) -> dict[str, float]:
     table = _table(value, path, "a table {u = .., v = ..}")
     _check_keys(table, ("u", "v"), path)
@@ -596,6 +606,12 @@ KINDS: dict[str, Kind] = {
         lambda v, a: {a[0]: float(v)},
         lambda m, a: int(_scalar(m, a[0])),
     ),
+    "pose": Kind(
+        "a whole number from 0 (a triad's pose index)",
+        _parse_pose,
+        lambda v, a: {a[0]: float(v)},
+        lambda m, a: int(_scalar(m, a[0])),
+    ),
     "uv": Kind(
         "a table {u = .., v = ..}",
         _parse_uv,
@@ -749,7 +765,14 @@ def _sixbar(*, second: FieldSpec, stephenson3: bool = False) -> FamilySpec:
 
     C and E are required: where a dyad attaches decides the topology, and no value is neutral.
     """
-    tail = (FieldSpec("input", "stephenson_input", default="crank"),) if stephenson3 else ()
+    tail = (
+        (
+            FieldSpec("input", "stephenson_input", default="crank"),
+            FieldSpec("pose", "pose", default=0),
+        )
+        if stephenson3
+        else ()
+    )
     return FamilySpec(
         fields=(
             *_FOURBAR_FIELDS,
@@ -893,6 +916,7 @@ FAMILY_SPECS: dict[str, FamilySpec] = {
             FieldSpec("input", "spherical_input", default="AB"),
             _ASSEMBLY,
             FieldSpec("assembly2", "sign", default=1),
+            FieldSpec("pose", "pose", default=0),
         ),
     ),
     "linkage": FamilySpec(

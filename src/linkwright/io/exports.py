@@ -73,6 +73,7 @@ from linkwright.engine import (
     SphereRigid,
     Trammel,
 )
+from linkwright.engine.plan import placed_joints
 from linkwright.files import atomic_path
 from linkwright.geometry.sphere import lambert_azimuthal, map_frame
 from linkwright.mechanisms import Mechanism, circuit, solve
@@ -266,6 +267,12 @@ def topology(mechanism: Mechanism) -> Topology:
             used_as_pivot.update((step.origin, step.toward))
             if not join(step.origin, step.toward, name):
                 new_body(step.origin, step.toward, name)
+        elif step in plan.triads:
+            # A ternary link held by three binary links, each from an anchor to its joint.
+            for anchor, joint in step.links()[:3]:
+                used_as_pivot.add(anchor)
+                new_body(anchor, joint)
+            new_body(*placed_joints(step))
         else:  # pragma: no cover - a step type this module does not know yet
             raise ExportError(f"joint {name!r}: cannot draw a {type(step).__name__} step")
     # A body on two ground joints cannot move: it is part of the frame, and may ground more.

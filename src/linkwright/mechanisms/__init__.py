@@ -23,7 +23,6 @@ from linkwright.mechanisms.linkage import (
 )
 from linkwright.mechanisms.planar import DoubleSlider, FourBar, GearedFiveBar, SliderCrank
 from linkwright.mechanisms.sixbar import Stephenson1, Stephenson3, Watt1, Watt2
-from linkwright.mechanisms.sphere_configs import solve_all_spherical
 from linkwright.mechanisms.spherical import (
     SphericalFourBar,
     SphericalSixBar,
@@ -79,5 +78,4 @@ __all__ = [
     "input_range",
     "solve",
     "solve_all",
-    "solve_all_spherical",
 ]

@@ -8,7 +8,6 @@ assembly choice.
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, fields, is_dataclass, replace
 from typing import ClassVar
 
@@ -16,7 +15,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import InputArcs, Motion, Plan, evaluate, input_arcs, trace
-from linkwright.engine.evaluate import batch_shape
+from linkwright.engine.continuation import arcs_of, every_circuit, every_configuration
+from linkwright.engine.evaluate import batch_shape, take
 
 __all__ = [
     "Mechanism",
@@ -33,6 +33,19 @@ Array = NDArray[np.float64]
 family_dataclass = dataclass(frozen=True, eq=False)
 """The decorator every family uses: frozen, with :class:`Mechanism`'s value equality (a plain
 dataclass would compare arrays with ``==``, which has no single truth value)."""
+
+
+class PlanByInput:
+    """The family's plan for the link its input drives: read on the class, the crank's (the
+    family's structure, for schemas and lists of dyads); on an instance, its own input's."""
+
+    def __init__(self, **plans: Plan) -> None:
+        self.plans = plans
+
+    def __get__(self, obj: object, owner: type | None = None) -> Plan:
+        if obj is None:
+            return next(iter(self.plans.values()))
+        return self.plans[getattr(obj, "input", next(iter(self.plans)))]
 
 
 class InvalidMechanism(ValueError):
@@ -62,6 +75,8 @@ class Mechanism:
 
     def __post_init__(self) -> None:
         for f in fields(self):
+            if f.type == "str":  # a word field (a six-bar's input) is the family's to check
+                continue
             # A copy, made read-only: the caller's array stays theirs, and the value cannot
             # change under a motion or a cache computed from it.
             value = np.array(getattr(self, f.name), dtype=float)
@@ -77,6 +92,8 @@ class Mechanism:
                     f"{f.name}: a spherical link's arc must lie strictly between 0° and 180°, "
                     f"got {np.degrees(bad).ravel()[:3].round(9).tolist()}°"
                 )
+            if f.name == "pose":
+                self._check_pose(value)
             # assembly, assembly2: the branch signs of a family's dyads.
             if f.name.startswith("assembly") and not np.all(np.abs(value) == 1):
                 bad = value[np.abs(value) != 1]
@@ -88,6 +105,17 @@ class Mechanism:
             self.batch_shape  # noqa: B018 - broadcasting check
         except ValueError as exc:
             raise InvalidMechanism(f"dimension arrays do not broadcast together: {exc}") from None
+
+    def _check_pose(self, value: NDArray) -> None:
+        """A triad's pose index: a whole number below its pose count."""
+        triads = self.plan.triads
+        most = max((t.max_poses for t in triads), default=1)  # type: ignore[attr-defined]
+        if np.any((value != np.round(value)) | (value < 0) | (value >= most)):
+            bad = value[(value != np.round(value)) | (value < 0) | (value >= most)]
+            raise InvalidMechanism(
+                f"pose: must be a whole number from 0 to {most - 1} (the triad's pose index), "
+                f"got {bad.ravel()[:3].tolist()}"
+            )
 
     def params(self) -> dict[str, Array]:
         """The named parameters of the plan (lengths, radians, points, assembly sign): every
@@ -225,25 +253,30 @@ def solve(mechanism: Mechanism, inputs: ArrayLike, *, order: int = 2) -> Motion:
 def configurations(
     mechanism: Mechanism, inputs: ArrayLike, *, order: int = 2
 ) -> list[tuple[tuple[int, ...], Motion]]:
-    """Every assembly configuration at the inputs: one motion per combination of branch signs.
+    """Every assembly configuration at the inputs: one motion per combination of branches.
 
-    Returns ``[(signs, motion), ...]`` with ``signs`` one ±1 per dyad in plan order; each motion's
-    ``valid`` says where that configuration is real.
+    Returns ``[(branches, motion), ...]``: ``branches`` holds one value per branching step in
+    plan order (a dyad's sign ±1, a triad's pose index 0 … 5, or 0 … 7 on the sphere); each
+    motion's ``valid`` says where that configuration is real. Any family, any batch.
+
+    Examples
+    --------
+    A four-bar has its two assembly modes; a linkage that cannot assemble has none real:
+
+    >>> from linkwright.mechanisms import FourBar
+    >>> found = configurations(FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=5, rocker=3.5), [0.0])
+    >>> [(signs, bool(m.valid[0])) for signs, m in found]
+    [((1,), True), ((-1,), True)]
+    >>> found = configurations(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3), [0.0])
+    >>> [bool(m.valid[0]) for _, m in found]
+    [False, False]
     """
-    dyads = mechanism.plan.dyads
-    out = []
-    for signs in itertools.product((1, -1), repeat=len(dyads)):
-        branches = {d.name: np.float64(s) for d, s in zip(dyads, signs, strict=True)}
-        motion = evaluate(
-            mechanism.plan,
-            mechanism.params(),
-            inputs,
-            points=mechanism.points,
-            branches=branches,
-            order=order,
-        )
-        out.append((signs, motion))
-    return out
+    combos, motion = every_configuration(
+        mechanism.plan, mechanism.params(), inputs, points=mechanism.points, order=order
+    )
+    return [
+        (tuple(int(v) for v in combo.values()), take(motion, k)) for k, combo in enumerate(combos)
+    ]
 
 
 def circuit(
@@ -299,7 +332,9 @@ def circuits(
     """The input's arcs, and every closed circuit the linkage runs on its assembly.
 
     One :func:`circuit` where the input turns fully; where it rocks, one per arc it rocks over
-    (each up and back, switching branch at its limits); none where it cannot be assembled.
+    (each up and back, switching branch at its limits); none where it cannot be assembled. A
+    linkage with a triad has its configurations followed rather than its assembly held: every
+    circuit of every configuration (:func:`linkwright.engine.continuation.every_circuit`).
 
     Examples
     --------
@@ -310,6 +345,17 @@ def circuits(
     >>> circuits(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3), 8)[1]
     []
     """
+    if mechanism.plan.triads:
+        # The configurations of a triad are followed, not held: every circuit of every one.
+        found = every_circuit(
+            mechanism.plan,
+            mechanism.params(),
+            samples,
+            points=mechanism.points,
+            order=order,
+            spacing=spacing,
+        )
+        return arcs_of(found, mechanism.batch_shape), [c.motion for c in found]
     arcs = input_range(mechanism)
     if bool(arcs.never):
         return arcs, []
@@ -322,5 +368,9 @@ def circuits(
 
 
 def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:
-    """The admissible input arcs (limit positions as exact roots) of each mechanism."""
+    """The admissible input arcs (limit positions as exact roots) of each mechanism.
+
+    For a linkage with a triad, the arcs of its circuits (:func:`circuits`), one mechanism at a
+    time; their limits are found to about 1e-10 rad.
+    """
     return input_arcs(mechanism.plan, mechanism.params(), points=mechanism.points, method=method)

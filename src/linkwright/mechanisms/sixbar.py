@@ -41,8 +41,9 @@ ternary, binary, ternary, binary): no four-bar contains the ground. Driving eith
 (the ternary or the binary) leaves four moving links and six joints, one of them a ternary with
 all three of its joints unknown: an Assur group of class III (a *triad*), which no sequence of
 dyads can place. Its positions are the roots of a polynomial of degree six, not the intersections
-of circles; it belongs with the all-configurations solver, like Stephenson III driven at its
-output (``Stephenson3(input="output")``), and not with construction plans.
+of circles: a triad plan step (:class:`~linkwright.engine.triad_steps.Triad`), as in the
+Stephenson III driven at its output (``Stephenson3(input="output")``). A Stephenson II family is
+such a plan; it is not declared yet.
 """
 
 from __future__ import annotations
@@ -54,8 +55,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import Crank, DyadRRR, Fixed, Motion, Plan, Rigid
 from linkwright.engine.plan import Step
+from linkwright.engine.triad_steps import Triad
 from linkwright.geometry import plane
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism, PlanByInput, family_dataclass
 
 __all__ = [
     "NoConstructionPlan",
@@ -79,33 +81,8 @@ _POINT = Rigid("P", "C", "D", "u", "v")
 
 
 class NoConstructionPlan(ValueError):
-    """A mechanism whose input does not leave a chain of dyads has no construction plan.
-
-    Raised on reading ``plan`` from such a mechanism (for now ``Stephenson3(input="output")``),
-    so every plan-based verb (:func:`~linkwright.mechanisms.solve`, ``circuit``,
-    ``configurations``, ``input_range``) refuses it instead of silently driving the crank.
-    """
-
-
-class _CrankInputPlan:
-    """The family's plan on the class and on crank-driven instances; an error otherwise.
-
-    A class attribute, so ``Stephenson3.plan`` stays a :class:`Plan` for code that reads a
-    family's structure (schemas, the CLI's list of dyads), while an instance driven elsewhere
-    cannot be handed to the plan evaluator by mistake.
-    """
-
-    def __init__(self, plan: Plan) -> None:
-        self.plan = plan
-
-    def __get__(self, obj: object, owner: type | None = None) -> Plan:
-        if obj is None or getattr(obj, "input", "crank") == "crank":
-            return self.plan
-        raise NoConstructionPlan(
-            f"{type(obj).__name__}(input={obj.input!r}) is driven at link D0D: the moving links "
-            "then form a triad, not a chain of dyads, so it has no construction plan; solve it "
-            "for all its real configurations with linkwright.mechanisms.allconfigs"
-        )
+    """A mechanism that has no construction plan. Every family has one now (triads are plan
+    steps); kept so that code written against the earlier refusal still imports."""
 
 
 def _length(motion: Motion, a: str, b: str) -> Array:
@@ -518,13 +495,16 @@ class Stephenson3(SixBar):
     assembly2 : ±1
         sign((D0 − C) × (D − C)).
     input : {"crank", "output"}
-        Which grounded link the input θ drives: the crank (θ the angle of A − A0; four-bar
-        plus dyad, solved by the plan) or the output (θ the angle of D − D0). Driven at the
-        output the moving links form a triad: the mechanism has no construction plan, reading
-        ``plan`` raises :class:`NoConstructionPlan`, and its configurations come from the
-        all-configurations solver (``linkwright.mechanisms.allconfigs``). One value for the
-        whole batch, since it chooses the solver. Its constraints, and :meth:`residuals`,
-        are the same either way except ``input``.
+        Which grounded link the input θ drives: the crank (θ the angle of A − A0; a four-bar
+        plus a dyad) or the output (θ the angle of D − D0). Driven at the output the coupler
+        ABC, held by the crank, the rocker and the link CD, is a triad: a plan step with up to
+        six poses (:class:`~linkwright.engine.triad_steps.Triad`). One value for the whole
+        batch, since it chooses the plan. Its constraints, and :meth:`residuals`, are the same
+        either way except ``input``.
+    pose : 0 to 5
+        Driven at the output: which pose of the triad, in the order of the coupler's angle
+        (of B − A) at each input. A name for one configuration at one input, not a branch
+        followed along the motion (:func:`~linkwright.mechanisms.circuits` follows those).
 
     Notes
     -----
@@ -543,12 +523,16 @@ class Stephenson3(SixBar):
     >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "D", "P")}
     {'C': [5.0, 2.0], 'D': [2.0, 2.0], 'P': [3.5, 1.0]}
 
-    Driven at the output it is a triad, and the plan-based verbs refuse it:
+    Driven at the output, the coupler is a triad. At θ = 90° (D = (2, 2)) it has two poses;
+    each holds every link:
 
-    >>> solve(Stephenson3(**{**m.params(), "input": "output"}), [0.0])  # doctest: +ELLIPSIS
-    Traceback (most recent call last):
-    ...
-    linkwright.mechanisms.sixbar.NoConstructionPlan: Stephenson3(input='output') is driven ...
+    >>> from linkwright.mechanisms import configurations
+    >>> driven = Stephenson3(**m.params(), input="output")
+    >>> found = configurations(driven, [np.pi / 2])
+    >>> [bool(motion.valid[0]) for _, motion in found]
+    [True, True, False, False, False, False]
+    >>> bool(max(np.max(np.abs(r)) for r in driven.residuals(found[1][1]).values()) < 1e-12)
+    True
     """
 
     A0: ArrayLike
@@ -566,6 +550,7 @@ class Stephenson3(SixBar):
     assembly: ArrayLike = 1.0
     assembly2: ArrayLike = 1.0
     input: str = "crank"
+    pose: ArrayLike = 0.0
 
     family: ClassVar[str] = "stephenson3"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0", "D0"})
@@ -573,8 +558,8 @@ class Stephenson3(SixBar):
     reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0", "A", "B", "C", "D", "P")
     ground: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0")
     attached: ClassVar[dict[str, tuple[str, str]]] = {"C": ("A", "B")}
-    plan: ClassVar[Plan] = _CrankInputPlan(  # type: ignore[assignment]
-        Plan(
+    plan: ClassVar[Plan] = PlanByInput(  # type: ignore[assignment]
+        crank=Plan(
             (
                 *_FOURBAR[:2],
                 Fixed("D0", "D0"),
@@ -584,20 +569,33 @@ class Stephenson3(SixBar):
                 _POINT,
             ),
             traced=("P",),
-        )
+        ),
+        # Driven at D0D: D turns with the input, and the coupler ABC, held by the crank, the
+        # rocker and the link CD, is a triad.
+        output=Plan(
+            (
+                *_FOURBAR[:2],
+                Fixed("D0", "D0"),
+                Crank("D", "D0", "link2"),
+                Triad(
+                    ("A", "B", "C"),
+                    ("A0", "B0", "D"),
+                    ("crank", "rocker", "link1"),
+                    "coupler",
+                    "u1",
+                    "v1",
+                ),
+                _POINT,
+            ),
+            traced=("P",),
+        ),
     )
 
     def __post_init__(self) -> None:
-        # The base converts every field to a float array; the string field sits that out
-        # (replaced by a number for the duration) and is checked here instead.
-        choice = self.input
-        if not isinstance(choice, str) or choice not in INPUTS:
-            raise InvalidMechanism(f"input: must be 'crank' or 'output', got {choice!r}")
-        object.__setattr__(self, "input", 0.0)
-        try:
-            super().__post_init__()
-        finally:
-            object.__setattr__(self, "input", str(choice))
+        # The base checks the numbers; the word that chooses the plan is checked here, first.
+        if not isinstance(self.input, str) or self.input not in INPUTS:
+            raise InvalidMechanism(f"input: must be 'crank' or 'output', got {self.input!r}")
+        super().__post_init__()
 
     @property
     def input_link(self) -> tuple[str, str]:

@@ -28,9 +28,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import Fixed, Motion, Plan, SphereCrank, SphereDyad, SphereRigid
+from linkwright.engine.triad_steps import SphereTriad
 from linkwright.geometry import sphere
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
-from linkwright.mechanisms.sixbar import NoConstructionPlan
+from linkwright.mechanisms.base import InvalidMechanism, Mechanism, PlanByInput, family_dataclass
 
 __all__ = ["SphericalFourBar", "SphericalSixBar", "SphericalStephenson3"]
 
@@ -224,22 +224,6 @@ class SphericalSixBar(Mechanism):
         }
 
 
-class _InputABPlan:
-    """The family's plan on the class and on AB-driven instances; an error for input FG."""
-
-    def __init__(self, plan: Plan) -> None:
-        self._plan = plan
-
-    def __get__(self, obj, owner=None) -> Plan:
-        if obj is None or getattr(obj, "input", "AB") == "AB":
-            return self._plan
-        raise NoConstructionPlan(
-            "SphericalStephenson3(input='FG') is driven at the output link FG: the coupler BCE, "
-            "held by AB, CD and EF, is a spherical triad with up to 8 configurations, which no "
-            "construction plan places; use solve_all (linkwright solve --all)"
-        )
-
-
 @family_dataclass
 class SphericalStephenson3(Mechanism):
     """The Stephenson-III spherical six-bar of paper 001 (Zong et al.); all arcs in radians.
@@ -256,9 +240,11 @@ class SphericalStephenson3(Mechanism):
     mirror-image coupler (σ → −σ), a different mechanism.
 
     ``input = "FG"`` drives θ6, the angle of F about +OG from the great circle G→(away from D).
-    The coupler is then a triad and has up to 8 real configurations (a degree-8 polynomial):
-    ``plan`` raises :class:`NoConstructionPlan`, and :func:`linkwright.mechanisms.solve_all`
-    finds them all. Joints: A, D, G, B, C, E, F (traced: E).
+    The coupler BCE, held by AB, CD and EF, is then a spherical triad with up to 8 real
+    configurations (a degree-8 polynomial): a plan step
+    (:class:`~linkwright.engine.triad_steps.SphereTriad`) whose branch is ``pose``, 0 to 7, the
+    index of the configuration in the order of paper 001's θ1 = ∠BAD at each input, from −180°
+    to 180°. Joints: A, D, G, B, C, E, F (traced: E).
     """
 
     a1: ArrayLike
@@ -273,14 +259,15 @@ class SphericalStephenson3(Mechanism):
     assembly: ArrayLike = 1.0
     assembly2: ArrayLike = 1.0
     input: str = "AB"
+    pose: ArrayLike = 0.0
 
     family: ClassVar[str] = "spherical-stephenson3"
     arc_fields: ClassVar[tuple[str, ...]] = ("a1", "a2", "a3", "a4", "a6", "a7", "a8", "a9")
     derived_points: ClassVar[frozenset[str]] = frozenset({"A", "D", "G", "away"})
     reported_joints: ClassVar[tuple[str, ...]] = ("A", "D", "G", "B", "C", "E", "F")
     traced_joint: ClassVar[str] = "E"
-    plan: ClassVar[Plan] = _InputABPlan(  # type: ignore[assignment]
-        Plan(
+    plan: ClassVar[Plan] = PlanByInput(  # type: ignore[assignment]
+        AB=Plan(
             (
                 Fixed("A", "A"),
                 Fixed("D", "D"),
@@ -292,21 +279,35 @@ class SphericalStephenson3(Mechanism):
                 SphereDyad("F", "E", "a7", "G", "a8", branch="assembly2"),
             ),
             traced=("E", "F"),
-        )
+        ),
+        FG=Plan(
+            (
+                Fixed("A", "A"),
+                Fixed("D", "D"),
+                Fixed("G", "G"),
+                SphereCrank("F", "G", "a8", ref="away"),
+                # E at arc a6 from C, turned by π − σ from the great circle C→B (eq. 3).
+                SphereTriad(
+                    ("C", "B", "E"),
+                    ("D", "A", "F"),
+                    ("a4", "a2", "a7"),
+                    "a3",
+                    "a6",
+                    "turn",
+                    sense=-1.0,  # poses in the order of θ1 = ∠BAD, left-handed (eq. 5)
+                ),
+            ),
+            traced=("E", "F"),
+        ),
     )
 
     def __post_init__(self) -> None:
-        choice = self.input
-        if choice not in ("AB", "FG"):
-            raise InvalidMechanism(f"input: must be 'AB' or 'FG', got {choice!r}")
-        # The base class validates numeric fields; `input` is a word.
-        object.__setattr__(self, "input", 0.0)
-        try:
-            super().__post_init__()
-            if np.any(np.asarray(self.a1) + np.asarray(self.a9) >= 2 * np.pi):
-                raise InvalidMechanism("a1 + a9: G would wrap past A (a1 + a9 ≥ 360°)")
-        finally:
-            object.__setattr__(self, "input", str(choice))
+        # The base checks the numbers; the word that chooses the plan is checked here, first.
+        if not isinstance(self.input, str) or self.input not in ("AB", "FG"):
+            raise InvalidMechanism(f"input: must be 'AB' or 'FG', got {self.input!r}")
+        super().__post_init__()
+        if np.any(np.asarray(self.a1) + np.asarray(self.a9) >= 2 * np.pi):
+            raise InvalidMechanism("a1 + a9: G would wrap past A (a1 + a9 ≥ 360°)")
 
     def params(self) -> dict[str, Array]:
         out = {

@@ -33,8 +33,8 @@ from numpy.typing import NDArray
 
 from linkwright.engine.sphere_triad import bilinear_resultant, circle_frame
 from linkwright.geometry import sphere
-from linkwright.mechanisms import SphericalStephenson3, solve
-from linkwright.mechanisms.sphere_configs import paper_angles, solve_all_spherical
+from linkwright.mechanisms import SphericalStephenson3, solve, solve_all
+from linkwright.papers.p001_angles import paper_angles
 
 __all__ = [
     "EXAMPLE",
@@ -112,9 +112,9 @@ def count_sweep(samples: int = 360) -> dict[str, Array]:
     """
     theta = np.linspace(0.0, 360.0, samples, endpoint=False)
     rad = np.radians(theta)
-    ab = solve_all_spherical(example("AB"), rad)
-    fg = solve_all_spherical(example("FG"), rad)
-    mirror = solve_all_spherical(example("AB", mirror=True), rad)
+    ab = solve_all(example("AB"), rad)
+    fg = solve_all(example("FG"), rad)
+    mirror = solve_all(example("AB", mirror=True), rad)
 
     def worst(r: Array) -> Array:
         return np.where(
@@ -146,7 +146,7 @@ def configuration_table(theta6: float = EXAMPLE_INPUT) -> list[dict[str, float]]
     (8, [-171.04, -168.477])
     """
     m = example("FG")
-    every = solve_all_spherical(m, np.radians([theta6]))
+    every = solve_all(m, np.radians([theta6]))
     angles = {k: _deg(v[0]) for k, v in paper_angles(m, every).items()}
     rows = []
     for k in range(int(every.count[0])):
@@ -199,8 +199,8 @@ def mirror_check(
     """
     rad = np.radians([theta1])
     m, mm = _pair(mechanism)
-    own = solve_all_spherical(m, rad)
-    mir = solve_all_spherical(mm, rad)
+    own = solve_all(m, rad)
+    mir = solve_all(mm, rad)
     n_own, n_mir = int(own.count[0]), int(mir.count[0])
     pos = {
         k: np.concatenate((own.positions[k][0, :n_own], mir.positions[k][0, :n_mir]))
@@ -272,7 +272,7 @@ def eq18_check(
 
     For each sign of eq. 17: θ4 = 2·arctan(x4) and the printed arctan(x4) (degrees), the error
     of eq. 5's C at each against the link BC (|arc BC − a3|, degrees), the chord from that C to
-    the nearest C of the configurations that :func:`solve_all_spherical` finds (NaN if none),
+    the nearest C of the configurations that :func:`solve_all` finds (NaN if none),
     and the circuit's sign ``assembly`` = sign((B × D)·C). NaN throughout where the four-bar
     does not close at ``theta1``.
 
@@ -283,7 +283,7 @@ def eq18_check(
     m, _ = _pair(mechanism)
     t1 = np.radians(theta1)
     b = _input_b(m, t1)
-    every = solve_all_spherical(m, np.array([t1]))
+    every = solve_all(m, np.array([t1]))
     found = every.positions["C"][0, : every.count[0]]
     rows = []
     for sign, x4 in zip((1.0, -1.0), _eq17(m, t1), strict=True):
@@ -351,7 +351,7 @@ def eq20_check(
     rad = np.array([t1])
     sets = []
     for mech in (m, mm):
-        every = solve_all_spherical(mech, rad)
+        every = solve_all(mech, rad)
         theta5 = paper_angles(mech, every)["theta5"][0, : every.count[0]]
         sets.append((every.positions["C"][0, : every.count[0]], theta5))
     rows = []
@@ -725,7 +725,7 @@ def _configurations_figure(theta6: float) -> Any:
     from linkwright.plot.sphere import SphereView
 
     m = example("FG")
-    every = solve_all_spherical(m, np.radians([theta6]))
+    every = solve_all(m, np.radians([theta6]))
     angles = paper_angles(m, every)
     count = int(every.count[0])
     pos = [{k: v[0, i] for k, v in every.positions.items()} for i in range(count)]
@@ -908,7 +908,7 @@ def reproduce(out: str | Path) -> list[Path]:
         "",
         "## Configuration counts",
         "",
-        "At every whole degree of each input, `solve_all_spherical` reports each real "
+        "At every whole degree of each input, `solve_all` reports each real "
         "configuration and its error against every constraint, recomputed from the positions "
         "(link arcs, E's place on the coupler, unit norms, the input):",
         "",

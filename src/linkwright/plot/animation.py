@@ -50,12 +50,9 @@ from numpy.typing import NDArray
 from PIL import Image
 
 from linkwright.engine import (
-    Crank,
     DyadRRP,
-    DyadRRR,
     Fixed,
     Motion,
-    Rigid,
     Trammel,
 )
 from linkwright.files import atomic_path
@@ -276,9 +273,7 @@ class _Guide:
 
 def _plane_parts(
     mechanism: Mechanism, motion: Motion
-) -> tuple[
-    dict[str, Array], list[tuple[str, str]], list[tuple[str, str, str]], list[_Guide], list[str]
-]:
+) -> tuple[dict[str, Array], list[tuple[str, str]], list[tuple[str, ...]], list[_Guide], list[str]]:
     """Positions (with the far ends of trammel arms), links, plates, guides and pivots."""
     params = mechanism.params()
 
@@ -287,18 +282,15 @@ def _plane_parts(
 
     pos = _positions(mechanism, motion)
     pairs: list[tuple[str, str]] = []
-    plates: list[tuple[str, str, str]] = []
+    plates: list[tuple[str, ...]] = []
     guides: list[_Guide] = []
+    # Links and plates as the steps declare them (a rigid point's sides are its plate's edges).
+    plates += mechanism.plan.plates
+    edges = {frozenset(pair) for plate in plates for pair in itertools.pairwise((*plate, plate[0]))}
+    pairs += [pair for pair in mechanism.plan.links if frozenset(pair) not in edges]
     for step in mechanism.plan.steps:
-        if isinstance(step, Crank):
-            pairs.append((step.pivot, step.name))
-        elif isinstance(step, DyadRRR):
-            pairs += [(step.p1, step.name), (step.p2, step.name)]
-        elif isinstance(step, DyadRRP):
-            pairs.append((step.p1, step.name))
+        if isinstance(step, DyadRRP):
             guides.append(_Guide(step.line_point, value(step.line_angle), pos[step.name]))
-        elif isinstance(step, Rigid):
-            plates.append((step.origin, step.toward, step.name))
         elif isinstance(step, Trammel):
             # The arm's far end runs on the second guide; it is no joint of the plan.
             phi = value(step.phase) + motion.input

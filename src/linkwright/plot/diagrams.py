@@ -236,7 +236,7 @@ def _dyad_links(mechanism: Mechanism) -> tuple[list[tuple[_Quantity, tuple[str, 
     """
     out: list[tuple[_Quantity, tuple[str, ...]]] = []
     skipped: list[str] = []
-    fixed = [s.name for s in mechanism.plan.steps if isinstance(s, Fixed)]
+    fixed = list(mechanism.plan.ground)
     for dyad in mechanism.plan.dyads:
         j = dyad.name
         if isinstance(dyad, DyadRRR):
@@ -253,6 +253,16 @@ def _dyad_links(mechanism: Mechanism) -> tuple[list[tuple[_Quantity, tuple[str, 
                     out.append((_pivot_angle(p, ref, j, f"{j} about {p}"), (p, j)))
                 else:
                     skipped.append(f"{p}–{j}")
+    # A triad hangs on its three binary links, each from an anchor to one of its joints.
+    for triad in mechanism.plan.triads:
+        for p, j in triad.links()[:3]:
+            ref = next((f for f in fixed if f != p), None)
+            if mechanism.space == "plane":
+                out.append((_link_angle(p, j, f"{p}–{j}"), (p, j)))
+            elif _fixed(mechanism, p) and ref is not None:
+                out.append((_pivot_angle(p, ref, j, f"{j} about {p}"), (p, j)))
+            else:
+                skipped.append(f"{p}–{j}")
     return out, skipped
 
 
@@ -292,7 +302,9 @@ def _outputs(mechanism: Mechanism, reference: Motion) -> _Outputs:
             "translate: their travels along the guides from M are shown",
             "t",
         )
-    if isinstance(mechanism, SixBar | SphericalSixBar | SphericalStephenson3):
+    if isinstance(mechanism, SixBar | SphericalSixBar | SphericalStephenson3) and (
+        mechanism.plan.dyads
+    ):
         # The last link: the one from the second dyad's second pivot (E or D0 in the plane,
         # the ground pivot E0 or G on the sphere) to its joint.
         dyad = mechanism.plan.dyads[-1]
@@ -397,7 +409,7 @@ def _legs(mechanism: Mechanism, circuits: list[_Circuit]) -> _Run:
         step = np.sign(np.diff(x))
         turns = [i for i in range(1, len(step)) if step[i] != step[i - 1] and step[i] != 0]
         bounds = [0, *turns, c.n]
-        changing = [name for name, b in m.branches.items() if np.unique(np.asarray(b)).size > 1]
+        changing = [name for name, b in m.labels.items() if np.unique(np.asarray(b)).size > 1]
         count = {"up": 0, "back": 0}
         for a, b in itertools.pairwise(bounds):
             word = "up" if x[b] > x[a] else "back"
@@ -405,7 +417,7 @@ def _legs(mechanism: Mechanism, circuits: list[_Circuit]) -> _Run:
             label = word if count[word] == 1 else f"{word} {count[word]}"
             mid = closed[(a + b) // 2]
             signs = ", ".join(
-                f"{name} {'+1' if float(m.branches[name][mid]) > 0 else MINUS + '1'}"
+                f"{name} {'+1' if float(m.labels[name][mid]) > 0 else MINUS + '1'}"
                 for name in changing
             )
             if signs:

@@ -63,13 +63,11 @@ from linkwright.analysis import (
 from linkwright.analysis.extrema import golden_max
 from linkwright.analysis.general import point_speed
 from linkwright.engine import (
-    Crank,
     DyadRRP,
     DyadRRR,
     Fixed,
     InputArcs,
     Motion,
-    Rigid,
     SphereDyad,
     Trammel,
     evaluate,
@@ -211,10 +209,10 @@ def _modes(mechanism: Mechanism, samples: int, *, every: bool = True) -> tuple[_
 
 
 def _branch_keys(motion: Motion) -> Array:
-    names = sorted(motion.branches)
+    names = sorted(motion.labels)
     if not names:
         return np.zeros((motion.shape[-1], 0))
-    return np.stack([motion.branches[k] for k in names], axis=-1)
+    return np.stack([motion.labels[k] for k in names], axis=-1)
 
 
 def _legs(motion: Motion, full: bool) -> list[NDArray[np.int64]]:
@@ -507,7 +505,7 @@ def _limit_marks(mechanism: Mechanism, own: _Mode) -> list[_Mark]:
         return marks
     for motion in own.circuits:
         keys = _branch_keys(motion)
-        names = sorted(motion.branches)
+        names = sorted(motion.labels)
         changed = keys != np.roll(keys, 1, axis=0)
         for i in np.flatnonzero(np.any(changed, axis=-1)):
             theta = float(motion.input[i])
@@ -614,21 +612,6 @@ def _input_status(arcs: InputArcs) -> str:
 # --------------------------------------------------------------------------------------------
 
 
-def _links(mechanism: Mechanism) -> list[tuple[str, str]]:
-    """Pairs of joints joined by a link (or lying on one rigid body), from the plan."""
-    pairs: list[tuple[str, str]] = []
-    for step in mechanism.plan.steps:
-        if isinstance(step, Crank):
-            pairs.append((step.pivot, step.name))
-        elif isinstance(step, DyadRRR):
-            pairs += [(step.p1, step.name), (step.p2, step.name)]
-        elif isinstance(step, DyadRRP):
-            pairs.append((step.p1, step.name))
-        elif isinstance(step, Rigid):
-            pairs += [(step.origin, step.name), (step.toward, step.name)]
-    return pairs
-
-
 def _guides(mechanism: Mechanism) -> list[tuple[str, float]]:
     """Slider guides as (joint on the guide, direction in radians)."""
     params = mechanism.params()
@@ -684,21 +667,20 @@ def draw_pose(
     for at, angle in _guides(mechanism):
         d = np.array([np.cos(angle), np.sin(angle)]) * span
         ax.plot(*np.stack((pos[at] - d, pos[at] + d)).T, color=GROUND, lw=0.8, ls="--", alpha=alpha)
-    for step in mechanism.plan.steps:
-        if isinstance(step, Rigid):
-            tri = np.stack([pos[step.origin], pos[step.toward], pos[step.name]])
-            if np.all(np.isfinite(tri)) and abs(plane.cross(tri[1] - tri[0], tri[2] - tri[0])) > 0:
-                ax.add_patch(
-                    Polygon(
-                        tri,
-                        closed=True,
-                        facecolor=BODY,
-                        edgecolor="none",
-                        alpha=0.5 * alpha,
-                        zorder=3.4,
-                    )
+    for plate in mechanism.plan.plates:
+        tri = np.stack([pos[j] for j in plate])
+        if np.all(np.isfinite(tri)) and abs(plane.cross(tri[1] - tri[0], tri[2] - tri[0])) > 0:
+            ax.add_patch(
+                Polygon(
+                    tri,
+                    closed=True,
+                    facecolor=BODY,
+                    edgecolor="none",
+                    alpha=0.5 * alpha,
+                    zorder=3.4,
                 )
-    pairs = _links(mechanism)
+            )
+    pairs = mechanism.plan.links
     for a, b in pairs:
         ax.plot(
             *np.stack((pos[a], pos[b])).T,
@@ -708,20 +690,21 @@ def draw_pose(
             solid_capstyle="round",
             zorder=4,
         )
-    traced = set(mechanism.plan.traced)
+    plan = mechanism.plan
+    traced = set(plan.traced)
     size = _pose_size(ax, finite)
-    ground = [s.name for s in mechanism.plan.steps if isinstance(s, Fixed)]
-    for step in mechanism.plan.steps:
-        p = pos[step.name]
+    ground = plan.ground
+    for name in plan.joints:
+        p = pos[name]
         if not np.all(np.isfinite(p)):
             continue
-        is_ground = isinstance(step, Fixed)
+        is_ground = name in ground
         if is_ground and alpha == 1.0:
             _ground_symbol(ax, p, size)
         style = {"ms": 7, "mfc": "white", "mec": LINK, "mew": 1.6}
         if is_ground and alpha < 1.0:
             style = {"ms": 8, "mfc": GROUND, "mec": LINK, "mew": 1.0, "marker": "^"}
-        elif step.name in traced:
+        elif name in traced:
             style.update(mfc=OWN_COLOR, mec="white")
         ax.plot(
             *p,
@@ -729,7 +712,7 @@ def draw_pose(
             alpha=alpha,
             zorder=6,
             ls="none",
-            label=f"_joint {step.name}",
+            label=f"_joint {name}",
         )
     if alpha != 1.0:
         return

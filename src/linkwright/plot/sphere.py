@@ -32,9 +32,6 @@ from numpy.typing import ArrayLike, NDArray
 from linkwright.engine import (
     Fixed,
     Motion,
-    SphereCrank,
-    SphereDyad,
-    SphereRigid,
 )
 from linkwright.geometry import sphere
 from linkwright.geometry.sphere import lambert_azimuthal
@@ -423,18 +420,16 @@ def _ground(mechanism: Mechanism) -> dict[str, Array]:
     }
 
 
-def _links(mechanism: Mechanism) -> tuple[list[tuple[str, str]], list[tuple[str, str, str]]]:
-    """Binary links as joint pairs, and rigid bodies (origin, toward, point) as triangles."""
-    pairs: list[tuple[str, str]] = []
-    bodies: list[tuple[str, str, str]] = []
-    for step in mechanism.plan.steps:
-        if isinstance(step, SphereCrank):
-            pairs.append((step.pivot, step.name))
-        elif isinstance(step, SphereDyad):
-            pairs += [(step.p1, step.name), (step.p2, step.name)]
-        elif isinstance(step, SphereRigid):
-            bodies.append((step.origin, step.toward, step.name))
-    return pairs, bodies
+def _links(
+    mechanism: Mechanism,
+) -> tuple[list[tuple[str, str]], list[tuple[str, ...]]]:
+    """Binary links as joint pairs, and rigid bodies as triangles, from the plan's steps (a
+    rigid point's sides are the triangle's edges, not links of their own)."""
+    plan = mechanism.plan
+    plates = list(plan.plates)
+    edges = {frozenset(pair) for plate in plates for pair in itertools.pairwise((*plate, plate[0]))}
+    pairs = [pair for pair in plan.links if frozenset(pair) not in edges]
+    return pairs, plates
 
 
 def default_view(mechanism: Mechanism, *, samples: int = 180) -> Array:
@@ -955,18 +950,19 @@ def _map_panel(
         if a in flat and b in flat:
             taken[a].append(flat[b] - flat[a])
             taken[b].append(flat[a] - flat[b])
-    for step in mechanism.plan.steps:
-        if step.name not in flat:
+    ground = mechanism.plan.ground
+    for name in mechanism.plan.joints:
+        if name not in flat:
             continue
-        is_ground = isinstance(step, Fixed)
+        is_ground = name in ground
         style = (
             {"marker": "^", "ms": 10, "mfc": GROUND, "mec": LINK, "mew": 1.0}
             if is_ground
             else {"marker": "o", "ms": 7, "mfc": "white", "mec": LINK, "mew": 1.6}
         )
-        if step.name == traced and not is_ground:
+        if name == traced and not is_ground:
             style.update(mfc=OWN_COLOR, mec="white")
-        ax.plot(*flat[step.name], ls="none", zorder=6, label=f"_joint {step.name}", **style)
+        ax.plot(*flat[name], ls="none", zorder=6, label=f"_joint {name}", **style)
     _label_joints(ax, flat, taken, {n: _letter(n) for n in flat})
     every = np.concatenate([*drawn, *(q[None] for q in flat.values())])
     every = every[np.all(np.isfinite(every), axis=-1)]
@@ -1147,8 +1143,9 @@ def _draw_pose(ax: Axes, cam: SphereView, mechanism: Mechanism, pose: dict[str, 
         e = _safe_arc(pose[a], pose[b])
         if e is not None:
             stroke(ax, cam, e, color=LINK, lw=2.4, z=4.0)
-    for step in mechanism.plan.steps:
-        _joint(ax, cam, step.name, pose[step.name], ground=isinstance(step, Fixed))
+    ground = mechanism.plan.ground
+    for name in mechanism.plan.joints:
+        _joint(ax, cam, name, pose[name], ground=name in ground)
 
 
 def _joint(ax: Axes, cam: SphereView, name: str, p: Array, *, ground: bool) -> None:

@@ -307,6 +307,10 @@ def _mode_label(raw: dict[str, Any], paths: list[str], values: tuple[int, ...]) 
 
 def _variants(doc: Document) -> list[tuple[str, dict[str, int], Document, bool]]:
     """(label, sign fields, document, own) for each assembly mode to draw, own first."""
+    if doc.mechanism is not None and doc.mechanism.plan.triads:
+        # A triad's configurations are followed along its circuits, not chosen by signs: one
+        # mode holds every circuit of every configuration.
+        return [("every configuration (a triad)", {}, doc, True)]
     raw = document_to_dict(doc)
     paths = _sign_paths(raw)
     own = tuple(int(_get(raw, p)) for p in paths)
@@ -385,7 +389,7 @@ def _circuit_json(
                 before, after = (i - 1) % n, (i + 1) % n
                 changed = [
                     name
-                    for name, b in motion.branches.items()
+                    for name, b in motion.labels.items()
                     if np.asarray(b)[before] != np.asarray(b)[after]
                 ]
                 limits.append((i, float(theta[i]), _limit_text(theta[i], changed, dyads, sphere)))

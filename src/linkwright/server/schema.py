@@ -72,6 +72,7 @@ def _kinds() -> dict[str, dict[str, Any]]:
         "number": coordinate,
         "angle_deg": angle,
         "sign": {"enum": [1, -1]},
+        "pose": {"type": "integer", "minimum": 0, "maximum": 7},
         "ratio": {"anyOf": [_number(low, 1 / low), _number(-1 / low, -low)]},
         "uv": table({"u": coordinate, "v": coordinate}, []),
         "line": table({"point": pair(2), "angle": angle}, ["point", "angle"]),
