@@ -1,7 +1,8 @@
 """Mechanism documents: TOML or JSON files that name a family and give its dimensions.
 
 A document speaks degrees; the mechanism objects it builds speak radians. Every field a family
-accepts is declared once, in :data:`FAMILY_SPECS`, as a *kind* (point, length, angle in degrees,
+accepts is declared once, in the family registry (:mod:`linkwright.mechanisms.registry`, read
+here as :data:`FAMILY_SPECS`), as a *kind* (point, length, angle in degrees,
 sign, coupler point, slider line; on the sphere arc, {arc, angle} offset, axis); validation,
 defaults, construction and the reverse conversion all read that one table, so a new family is a
 new row. The composed family ``linkage`` is one row too: its ``joints`` field is a list of joint
@@ -147,6 +148,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from linkwright.files import atomic_path
+from linkwright.mechanisms import registry
+from linkwright.mechanisms.registry import Derived, FieldSpec
 
 if TYPE_CHECKING:
     from linkwright.mechanisms import Mechanism
@@ -703,36 +706,6 @@ KINDS: dict[str, Kind] = {
 
 
 @dataclass(frozen=True)
-class Derived:
-    """A default computed from the fields validated before it (in table order).
-
-    ``describe`` says what it is (for the schema's readers); ``compute`` maps the fields parsed
-    so far to the default's canonical value.
-    """
-
-    describe: str
-    compute: Callable[[dict[str, Any]], Any]
-
-
-@dataclass(frozen=True)
-class FieldSpec:
-    """A family field: its document name, kind, constructor attributes and default.
-
-    ``attrs`` defaults to ``(name,)``; ``default`` of ``None`` makes the field required, a
-    :class:`Derived` computes it from the fields before it.
-    """
-
-    name: str
-    kind: str
-    attrs: tuple[str, ...] = ()
-    default: Any = None
-
-    @property
-    def targets(self) -> tuple[str, ...]:
-        return self.attrs or (self.name,)
-
-
-@dataclass(frozen=True)
 class FamilySpec:
     """A family's document schema: its fields, the points that must differ, and other checks."""
 
@@ -745,52 +718,6 @@ class FamilySpec:
     @property
     def names(self) -> tuple[str, ...]:
         return tuple(f.name for f in self.fields)
-
-
-# The four-bar's fields, shared by every six-bar (each starts from the very same four-bar).
-_FOURBAR_FIELDS = (
-    FieldSpec("A0", "point"),
-    FieldSpec("B0", "point"),
-    FieldSpec("crank", "length"),
-    FieldSpec("coupler", "length"),
-    FieldSpec("rocker", "length"),
-)
-_FRAME = (("B0", "A0", "the frame A0B0 must have a positive length"),)
-_POINT = FieldSpec("point", "uv", ("u", "v"), {"u": 0.0, "v": 0.0})
-_ASSEMBLY = FieldSpec("assembly", "sign", default=1)
-
-
-def _sixbar(*, second: FieldSpec, stephenson3: bool = False) -> FamilySpec:
-    """A six-bar's schema: the four-bar, C, then E or D0, the second dyad and the point.
-
-    C and E are required: where a dyad attaches decides the topology, and no value is neutral.
-    """
-    tail = (
-        (
-            FieldSpec("input", "stephenson_input", default="crank"),
-            FieldSpec("pose", "pose", default=0),
-        )
-        if stephenson3
-        else ()
-    )
-    return FamilySpec(
-        fields=(
-            *_FOURBAR_FIELDS,
-            FieldSpec("C", "uv", ("u1", "v1")),
-            second,
-            FieldSpec("link1", "length"),
-            FieldSpec("link2", "length"),
-            _POINT,
-            _ASSEMBLY,
-            FieldSpec("assembly2", "sign", default=1),
-            *tail,
-        ),
-        distinct=_FRAME,
-    )
-
-
-_E = FieldSpec("E", "uv", ("u2", "v2"))
-_D0 = FieldSpec("D0", "point")
 
 
 def _doubleslider_lines(m: dict[str, Any]) -> None:
@@ -811,17 +738,6 @@ def _doubleslider_lines(m: dict[str, Any]) -> None:
         )
 
 
-# Paper 000's four-bar: frame A0B0 (a1), crank A0A (a2), coupler AB (a3), rocker B0B (a4); its
-# coupler point at arc AP from A and angle BAP about +OA (the paper's AC and μ).
-_SPHERICAL_FOURBAR_FIELDS = (
-    FieldSpec("frame", "arc"),
-    FieldSpec("crank", "arc"),
-    FieldSpec("coupler", "arc"),
-    FieldSpec("rocker", "arc"),
-)
-_NO_OFFSET = {"arc": 0.0, "angle": 0.0}
-
-
 def _linkage_traced(m: dict[str, Any]) -> None:
     names = {j["name"] for j in m["joints"]}
     for i, name in enumerate(m["traced"]):
@@ -834,107 +750,33 @@ def _linkage_traced(m: dict[str, Any]) -> None:
             raise DocumentError(f"mechanism.traced[{i}]", f"joint {name!r} is listed twice")
 
 
-FAMILY_SPECS: dict[str, FamilySpec] = {
-    "fourbar": FamilySpec(fields=(*_FOURBAR_FIELDS, _POINT, _ASSEMBLY), distinct=_FRAME),
-    "slidercrank": FamilySpec(
-        fields=(
-            FieldSpec("A0", "point"),
-            FieldSpec("crank", "length"),
-            FieldSpec("rod", "length"),
-            FieldSpec("line", "line", ("line_point", "line_angle")),
-            _POINT,
-            _ASSEMBLY,
-        ),
-    ),
-    # A0 and B0 may coincide: two cranks on one axis still make a five-bar.
-    "geared-fivebar": FamilySpec(
-        fields=(
-            FieldSpec("A0", "point"),
-            FieldSpec("B0", "point"),
-            FieldSpec("crank1", "length"),
-            FieldSpec("crank2", "length"),
-            FieldSpec("link1", "length"),
-            FieldSpec("link2", "length"),
-            FieldSpec("phase1", "angle_deg", default=0.0),
-            FieldSpec("phase2", "angle_deg", default=0.0),
-            FieldSpec("ratio", "ratio", default=-1.0),
-            _POINT,
-            _ASSEMBLY,
-        ),
-    ),
-    "doubleslider": FamilySpec(
-        fields=(
-            FieldSpec("M", "point"),
-            FieldSpec("alpha", "angle_deg"),
-            FieldSpec("beta", "angle_deg"),
-            FieldSpec("p", "number"),
-            FieldSpec("q", "number"),
-            FieldSpec("h", "number", default=0.0),
-        ),
-        checks=(_doubleslider_lines,),
-    ),
-    "watt1": _sixbar(second=_E),
-    "watt2": _sixbar(second=_D0),
-    "stephenson1": _sixbar(second=_E),
-    "stephenson3": _sixbar(second=_D0, stephenson3=True),
-    "spherical-fourbar": FamilySpec(
-        fields=(
-            *_SPHERICAL_FOURBAR_FIELDS,
-            FieldSpec("point", "arc_point", ("point_arc", "point_angle"), _NO_OFFSET),
-            _ASSEMBLY,
-        ),
-    ),
-    # Paper 000, Fig. 8: the four-bar's coupler point is C, where link5 (CE) hangs; E0 sits at
-    # ground = {arc = B0E0, angle = ε} from B0 (ε from the frame circle beyond B0); the traced
-    # point D at d = {arc = CD, angle = ECD} from C. C is required, as a planar six-bar's C is.
-    "spherical-sixbar": FamilySpec(
-        fields=(
-            *_SPHERICAL_FOURBAR_FIELDS,
-            FieldSpec("point", "arc_point", ("point_arc", "point_angle")),
-            FieldSpec("link5", "arc"),
-            FieldSpec("link6", "arc"),
-            FieldSpec("ground", "arc_pivot", ("ground_arc", "ground_angle")),
-            FieldSpec("d", "arc_point", ("d_arc", "d_angle"), _NO_OFFSET),
-            _ASSEMBLY,
-            FieldSpec("assembly2", "sign", default=1),
-        ),
-    ),
-    # Paper 001: a1 = AD, a2 = AB, a3 = BC, a4 = CD, a6 = CE, σ = 180° − angle BCE, a7 = EF,
-    # a8 = FG, a9 = DG. No check that a1 + a9 < 360 (the class's): two arcs each below 180
-    # cannot reach it, in radians either (the two largest floats below π sum to less than 2π).
-    "spherical-stephenson3": FamilySpec(
-        fields=(
-            FieldSpec("a1", "arc"),
-            FieldSpec("a2", "arc"),
-            FieldSpec("a3", "arc"),
-            FieldSpec("a4", "arc"),
-            FieldSpec("a6", "arc"),
-            FieldSpec("sigma", "angle_deg"),
-            FieldSpec("a7", "arc"),
-            FieldSpec("a8", "arc"),
-            FieldSpec("a9", "arc"),
-            FieldSpec("input", "spherical_input", default="AB"),
-            _ASSEMBLY,
-            FieldSpec("assembly2", "sign", default=1),
-            FieldSpec("pose", "pose", default=0),
-        ),
-    ),
-    "linkage": FamilySpec(
-        fields=(
-            FieldSpec("space", "space", default="plane"),
-            FieldSpec("joints", "joints"),
-            FieldSpec(
-                "traced",
-                "names",
-                default=Derived(
-                    "the last joint",
-                    lambda m: [m["joints"][-1]["name"]] if m["joints"] else [],
-                ),
-            ),
-        ),
-        checks=(_linkage_traced,),
-    ),
+# Rules across a family's fields that a document must keep (the registry declares the fields).
+_CHECKS: dict[str, tuple[Callable[[dict[str, Any]], None], ...]] = {
+    "doubleslider": (_doubleslider_lines,),
+    "linkage": (_linkage_traced,),
 }
+
+
+def _family_specs() -> dict[str, FamilySpec]:
+    """Every registered family's document schema (:mod:`linkwright.mechanisms.registry`)."""
+    return {
+        f.name: FamilySpec(fields=f.fields, distinct=f.distinct, checks=_CHECKS.get(f.name, ()))
+        for f in registry.families()
+    }
+
+
+FAMILY_SPECS: dict[str, FamilySpec] = _family_specs()
+"""Every family's document schema, by family name, derived from the registry (a family
+registered after this module was imported is added when a document first names it)."""
+
+
+def _registered() -> None:
+    """Add the families registered since this module was imported (a family of one's own,
+    declared in a file of its own, is read like a built-in one)."""
+    if len(FAMILY_SPECS) != sum(1 for _ in registry.families()):
+        FAMILY_SPECS.clear()
+        FAMILY_SPECS.update(_family_specs())
+
 
 JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
     "fixed": (FieldSpec("at", "point"),),
@@ -1125,12 +967,9 @@ def _joints_from_mech(joints: Any, space: str) -> list[dict[str, Any]]:
 
 
 def _mechanism_class(family: str) -> type[Mechanism]:
-    from linkwright.mechanisms import FAMILIES
-
     try:
-        return FAMILIES[family]
-    except KeyError:
-        # A schema can land before its class: the document is valid, this build cannot run it.
+        return registry.family(family).cls  # type: ignore[no-any-return]
+    except LookupError:
         raise DocumentError(
             "mechanism.family", f"family {family!r} is not available in this version"
         ) from None
@@ -1238,6 +1077,7 @@ def _validate(mapping: Any) -> dict[str, Any]:
 
 def _validate_mechanism(value: Any) -> dict[str, Any]:
     mech = _table(value, "mechanism", "a table")
+    _registered()
     known = tuple(FAMILY_SPECS)
     if "family" not in mech:
         raise DocumentError(
@@ -1361,6 +1201,7 @@ def mechanism_to_dict(mech: Mechanism, title: str | None = None) -> dict[str, An
     {'point': [0.0, 0.0], 'angle': 30.0}
     """
     family = getattr(mech, "family", None)
+    _registered()
     if family not in FAMILY_SPECS:
         known = tuple(FAMILY_SPECS)
         raise DocumentError("mechanism.family", _unknown("family", str(family), known))

@@ -1,5 +1,6 @@
 """Named mechanism families: thin constructors over engine plans."""
 
+from linkwright.mechanisms import registry
 from linkwright.mechanisms.allconfigs import AllConfigurations, solve_all
 from linkwright.mechanisms.base import (
     InvalidMechanism,
@@ -29,23 +30,8 @@ from linkwright.mechanisms.spherical import (
     SphericalStephenson3,
 )
 
-FAMILIES: dict[str, type[Mechanism]] = {
-    cls.family: cls
-    for cls in (
-        FourBar,
-        SliderCrank,
-        GearedFiveBar,
-        DoubleSlider,
-        Watt1,
-        Watt2,
-        Stephenson1,
-        Stephenson3,
-        Linkage,
-        SphericalFourBar,
-        SphericalSixBar,
-        SphericalStephenson3,
-    )
-}
+FAMILIES: dict[str, type[Mechanism]] = {f.name: f.cls for f in registry.families()}
+"""Every registered family's class, by name (:mod:`linkwright.mechanisms.registry`)."""
 
 __all__ = [
     "FAMILIES",
@@ -76,6 +62,7 @@ __all__ = [
     "circuits",
     "configurations",
     "input_range",
+    "registry",
     "solve",
     "solve_all",
 ]

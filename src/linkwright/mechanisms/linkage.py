@@ -87,6 +87,7 @@ from linkwright.engine import (
 from linkwright.engine.evaluate import batch_shape
 from linkwright.geometry import plane, sphere
 from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
+from linkwright.mechanisms.registry import Derived, Family, FieldSpec, register
 
 __all__ = [
     "JOINT_TYPES",
@@ -1138,3 +1139,33 @@ def _compile(
         else:
             steps.append(Rigid(n, j.origin, j.toward, key("u"), key("v")))
     return tuple(steps), params, frozenset(points)
+
+
+# --------------------------------------------------------------------------------------------
+# The registry
+# --------------------------------------------------------------------------------------------
+
+register(
+    Family(
+        name="linkage",
+        cls=Linkage,
+        display="Composed linkage",
+        group="Free linkages",
+        space="either",
+        example="jansen-leg",
+        fields=(
+            FieldSpec("space", "space", default="plane"),
+            FieldSpec("joints", "joints"),
+            FieldSpec(
+                "traced",
+                "names",
+                default=Derived(
+                    "the last joint",
+                    lambda m: [m["joints"][-1]["name"]] if m["joints"] else [],
+                ),
+            ),
+        ),
+        joints=(("(any)", "every joint is named in the document"),),
+        source="any linkage built joint by joint (Jansen's and Klann's legs are bundled)",
+    )
+)

@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 from linkwright.engine import Crank, DyadRRP, DyadRRR, Fixed, Motion, Plan, Rigid, Trammel
 from linkwright.geometry import plane
 from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
+from linkwright.mechanisms.registry import Family, FieldSpec, register
 
 __all__ = ["DoubleSlider", "FourBar", "GearedFiveBar", "SliderCrank"]
 
@@ -377,3 +378,120 @@ class DoubleSlider(Mechanism):
             "RQ": plane.norm(Q - R + pq[..., None] * turn) / s,
             "point": plane.norm(P - want_p) / s,
         }
+
+
+# --------------------------------------------------------------------------------------------
+# The registry: each family's document fields, names and example
+# --------------------------------------------------------------------------------------------
+
+# The four-bar's fields, shared by every planar six-bar (each starts from the very same one).
+FOURBAR_FIELDS = (
+    FieldSpec("A0", "point"),
+    FieldSpec("B0", "point"),
+    FieldSpec("crank", "length"),
+    FieldSpec("coupler", "length"),
+    FieldSpec("rocker", "length"),
+)
+FRAME_DISTINCT = (("B0", "A0", "the frame A0B0 must have a positive length"),)
+POINT_FIELD = FieldSpec("point", "uv", ("u", "v"), {"u": 0.0, "v": 0.0})
+ASSEMBLY_FIELD = FieldSpec("assembly", "sign", default=1)
+FOURBAR_JOINTS = (
+    ("A0", "crank pivot"),
+    ("B0", "rocker pivot"),
+    ("A", "crank-coupler joint"),
+    ("B", "coupler-rocker joint"),
+    ("P", "traced coupler point"),
+)
+
+register(
+    Family(
+        name="fourbar",
+        cls=FourBar,
+        display="Four-bar",
+        group="Four-bars",
+        space="plane",
+        example="crank-rocker",
+        fields=(*FOURBAR_FIELDS, POINT_FIELD, ASSEMBLY_FIELD),
+        distinct=FRAME_DISTINCT,
+        joints=FOURBAR_JOINTS,
+        source="papers 002 and 003 (the four-bar of their analyses)",
+    )
+)
+register(
+    Family(
+        name="slidercrank",
+        cls=SliderCrank,
+        display="Slider-crank",
+        group="Slider linkages",
+        space="plane",
+        example="offset-slider-crank",
+        fields=(
+            FieldSpec("A0", "point"),
+            FieldSpec("crank", "length"),
+            FieldSpec("rod", "length"),
+            FieldSpec("line", "line", ("line_point", "line_angle")),
+            POINT_FIELD,
+            ASSEMBLY_FIELD,
+        ),
+        joints=(("A0", "crank pivot"), ("A", "crank pin"), ("B", "slider"), ("P", "traced point")),
+        source="paper 003 (its slider-crank tables)",
+    )
+)
+# A0 and B0 may coincide: two cranks on one axis still make a five-bar.
+register(
+    Family(
+        name="geared-fivebar",
+        cls=GearedFiveBar,
+        display="Geared five-bar",
+        group="Geared linkages",
+        space="plane",
+        example="geared-fivebar",
+        fields=(
+            FieldSpec("A0", "point"),
+            FieldSpec("B0", "point"),
+            FieldSpec("crank1", "length"),
+            FieldSpec("crank2", "length"),
+            FieldSpec("link1", "length"),
+            FieldSpec("link2", "length"),
+            FieldSpec("phase1", "angle_deg", default=0.0),
+            FieldSpec("phase2", "angle_deg", default=0.0),
+            FieldSpec("ratio", "ratio", default=-1.0),
+            POINT_FIELD,
+            ASSEMBLY_FIELD,
+        ),
+        joints=(
+            ("A0", "first crank's pivot"),
+            ("B0", "second crank's pivot"),
+            ("A", "first crank's end"),
+            ("B", "second crank's end"),
+            ("C", "the links' joint"),
+            ("P", "traced point"),
+        ),
+        source="paper 002 (Abhyankar & Gajjal)",
+    )
+)
+register(
+    Family(
+        name="doubleslider",
+        cls=DoubleSlider,
+        display="Double slider",
+        group="Slider linkages",
+        space="plane",
+        example="elliptic-trammel",
+        fields=(
+            FieldSpec("M", "point"),
+            FieldSpec("alpha", "angle_deg"),
+            FieldSpec("beta", "angle_deg"),
+            FieldSpec("p", "number"),
+            FieldSpec("q", "number"),
+            FieldSpec("h", "number", default=0.0),
+        ),
+        joints=(
+            ("M", "the guides' crossing"),
+            ("R", "first slider"),
+            ("Q", "second slider"),
+            ("P", "traced point"),
+        ),
+        source="paper 004 (Kiper, Akbalçık, Şen)",
+    )
+)

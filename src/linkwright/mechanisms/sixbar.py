@@ -58,6 +58,14 @@ from linkwright.engine.plan import Step
 from linkwright.engine.triad_steps import Triad
 from linkwright.geometry import plane
 from linkwright.mechanisms.base import InvalidMechanism, Mechanism, PlanByInput, family_dataclass
+from linkwright.mechanisms.planar import (
+    ASSEMBLY_FIELD,
+    FOURBAR_FIELDS,
+    FOURBAR_JOINTS,
+    FRAME_DISTINCT,
+    POINT_FIELD,
+)
+from linkwright.mechanisms.registry import Family, FieldSpec, register
 
 __all__ = [
     "NoConstructionPlan",
@@ -600,3 +608,88 @@ class Stephenson3(SixBar):
     @property
     def input_link(self) -> tuple[str, str]:
         return ("A0", "A") if self.input == "crank" else ("D0", "D")
+
+
+# --------------------------------------------------------------------------------------------
+# The registry
+# --------------------------------------------------------------------------------------------
+
+
+def _sixbar_fields(second: FieldSpec, *, stephenson3: bool = False) -> tuple[FieldSpec, ...]:
+    """A six-bar's fields: the four-bar, C, then E or D0, the second dyad and the point. C and E
+    are required: where a dyad attaches decides the topology, and no value is neutral."""
+    tail = (
+        (
+            FieldSpec("input", "stephenson_input", default="crank"),
+            FieldSpec("pose", "pose", default=0),
+        )
+        if stephenson3
+        else ()
+    )
+    return (
+        *FOURBAR_FIELDS,
+        FieldSpec("C", "uv", ("u1", "v1")),
+        second,
+        FieldSpec("link1", "length"),
+        FieldSpec("link2", "length"),
+        POINT_FIELD,
+        ASSEMBLY_FIELD,
+        FieldSpec("assembly2", "sign", default=1),
+        *tail,
+    )
+
+
+_E = FieldSpec("E", "uv", ("u2", "v2"))
+_D0 = FieldSpec("D0", "point")
+
+
+def _joints(cls: type[SixBar], roles: dict[str, str]) -> tuple[tuple[str, str], ...]:
+    return tuple((j, roles.get(j, dict(FOURBAR_JOINTS).get(j, ""))) for j in cls.reported_joints)
+
+
+for _cls, _second, _roles, _display in (
+    (
+        Watt1,
+        _E,
+        {"C": "on the crank", "E": "on the coupler", "D": "the second dyad's joint"},
+        "Watt I six-bar",
+    ),
+    (
+        Watt2,
+        _D0,
+        {"D0": "the output's pivot", "C": "on the rocker", "D": "the second dyad's joint"},
+        "Watt II six-bar",
+    ),
+    (
+        Stephenson1,
+        _E,
+        {"C": "on the crank", "E": "on the rocker", "D": "the second dyad's joint"},
+        "Stephenson I six-bar",
+    ),
+    (
+        Stephenson3,
+        _D0,
+        {
+            "D0": "the output's pivot (paper 001's G)",
+            "C": "on the coupler",
+            "D": "the output's joint",
+        },
+        "Stephenson III six-bar",
+    ),
+):
+    register(
+        Family(
+            name=_cls.family,
+            cls=_cls,
+            display=_display,
+            group="Six-bars",
+            space="plane",
+            example=f"{_cls.family}-example",
+            fields=_sixbar_fields(_second, stephenson3=_cls is Stephenson3),
+            distinct=FRAME_DISTINCT,
+            joints=_joints(_cls, {**_roles, "P": "traced point on CD"}),
+            source="the six-bar chains of Watt and Stephenson (paper 001's topology in the plane)"
+            if _cls is Stephenson3
+            else "the six-bar chains of Watt and Stephenson",
+        )
+    )

@@ -31,6 +31,7 @@ from linkwright.engine import Fixed, Motion, Plan, SphereCrank, SphereDyad, Sphe
 from linkwright.engine.triad_steps import SphereTriad
 from linkwright.geometry import sphere
 from linkwright.mechanisms.base import InvalidMechanism, Mechanism, PlanByInput, family_dataclass
+from linkwright.mechanisms.registry import Family, FieldSpec, register
 
 __all__ = ["SphericalFourBar", "SphericalSixBar", "SphericalStephenson3"]
 
@@ -349,3 +350,115 @@ class SphericalStephenson3(Mechanism):
             "FG": _arc_error(motion, "F", "G", self.a8),
             "unit": _unit_error(motion),
         }
+
+
+# --------------------------------------------------------------------------------------------
+# The registry
+# --------------------------------------------------------------------------------------------
+
+# Paper 000's four-bar: frame A0B0 (a1), crank A0A (a2), coupler AB (a3), rocker B0B (a4); its
+# coupler point at arc AP from A and angle BAP about +OA (the paper's AC and μ).
+_FOURBAR_ARCS = (
+    FieldSpec("frame", "arc"),
+    FieldSpec("crank", "arc"),
+    FieldSpec("coupler", "arc"),
+    FieldSpec("rocker", "arc"),
+)
+_NO_OFFSET = {"arc": 0.0, "angle": 0.0}
+_ASSEMBLY = FieldSpec("assembly", "sign", default=1)
+
+register(
+    Family(
+        name="spherical-fourbar",
+        cls=SphericalFourBar,
+        display="Spherical four-bar",
+        group="Spherical",
+        space="sphere",
+        example="paper000-fig6-crank-rocker",
+        fields=(
+            *_FOURBAR_ARCS,
+            FieldSpec("point", "arc_point", ("point_arc", "point_angle"), _NO_OFFSET),
+            _ASSEMBLY,
+        ),
+        joints=(
+            ("A0", "crank pivot, (1, 0, 0)"),
+            ("B0", "rocker pivot, on the frame circle"),
+            ("A", "crank-coupler joint"),
+            ("B", "coupler-rocker joint"),
+            ("P", "traced coupler point (paper 000's C)"),
+        ),
+        source="papers 000 (Özçelik & Şaka) and 003",
+    )
+)
+# Paper 000, Fig. 8: the four-bar's coupler point is C, where link5 (CE) hangs; E0 sits at
+# ground = {arc = B0E0, angle = ε} from B0 (ε from the frame circle beyond B0); the traced
+# point D at d = {arc = CD, angle = ECD} from C. C is required, as a planar six-bar's C is.
+register(
+    Family(
+        name="spherical-sixbar",
+        cls=SphericalSixBar,
+        display="Spherical six-bar",
+        group="Spherical",
+        space="sphere",
+        example="paper000-fig8-sixbar",
+        fields=(
+            *_FOURBAR_ARCS,
+            FieldSpec("point", "arc_point", ("point_arc", "point_angle")),
+            FieldSpec("link5", "arc"),
+            FieldSpec("link6", "arc"),
+            FieldSpec("ground", "arc_pivot", ("ground_arc", "ground_angle")),
+            FieldSpec("d", "arc_point", ("d_arc", "d_angle"), _NO_OFFSET),
+            _ASSEMBLY,
+            FieldSpec("assembly2", "sign", default=1),
+        ),
+        joints=(
+            ("A0", "crank pivot"),
+            ("B0", "rocker pivot"),
+            ("E0", "the second dyad's pivot"),
+            ("A", "crank-coupler joint"),
+            ("B", "coupler-rocker joint"),
+            ("C", "on the coupler"),
+            ("E", "the second dyad's joint"),
+            ("D", "traced point"),
+        ),
+        source="paper 000, Fig. 8",
+    )
+)
+# Paper 001: a1 = AD, a2 = AB, a3 = BC, a4 = CD, a6 = CE, σ = 180° − angle BCE, a7 = EF,
+# a8 = FG, a9 = DG. No check that a1 + a9 < 360 (the class's): two arcs each below 180
+# cannot reach it, in radians either (the two largest floats below π sum to less than 2π).
+register(
+    Family(
+        name="spherical-stephenson3",
+        cls=SphericalStephenson3,
+        display="Spherical Stephenson III six-bar",
+        group="Spherical",
+        space="sphere",
+        example="paper001-stephenson3",
+        fields=(
+            FieldSpec("a1", "arc"),
+            FieldSpec("a2", "arc"),
+            FieldSpec("a3", "arc"),
+            FieldSpec("a4", "arc"),
+            FieldSpec("a6", "arc"),
+            FieldSpec("sigma", "angle_deg"),
+            FieldSpec("a7", "arc"),
+            FieldSpec("a8", "arc"),
+            FieldSpec("a9", "arc"),
+            FieldSpec("input", "spherical_input", default="AB"),
+            _ASSEMBLY,
+            FieldSpec("assembly2", "sign", default=1),
+            FieldSpec("pose", "pose", default=0),
+        ),
+        joints=(
+            ("A", "fixed, the input AB's pivot"),
+            ("D", "fixed, the output CD's pivot"),
+            ("G", "fixed, the output FG's pivot"),
+            ("B", "input link's end"),
+            ("C", "on the ternary coupler BCE"),
+            ("E", "on the coupler, traced"),
+            ("F", "link EF's joint with FG"),
+        ),
+        source="paper 001 (Zong, Lu, An, Zhang)",
+    )
+)

@@ -70,6 +70,7 @@ from linkwright.mechanisms import (
     SphericalStephenson3,
     input_range,
 )
+from linkwright.mechanisms.registry import family_of
 from linkwright.mechanisms.sixbar import NoConstructionPlan, SixBar
 from linkwright.plot.planar import (
     CURVE_COLOR,
@@ -92,19 +93,6 @@ Array = NDArray[np.float64]
 
 KINDS: tuple[str, ...] = ("angles", "velocity", "acceleration", "coefficients")
 
-FAMILY_NAMES = {
-    "fourbar": "Four-bar",
-    "slidercrank": "Slider-crank",
-    "geared-fivebar": "Geared five-bar",
-    "doubleslider": "Double slider",
-    "watt1": "Watt I six-bar",
-    "watt2": "Watt II six-bar",
-    "stephenson1": "Stephenson I six-bar",
-    "stephenson3": "Stephenson III six-bar",
-    "spherical-fourbar": "Spherical four-bar",
-    "spherical-sixbar": "Spherical six-bar",
-    "spherical-stephenson3": "Spherical Stephenson III six-bar",
-}
 
 # One colour per plotted quantity (a traced point, an output, a link); the line style tells
 # the legs of a rocking circuit apart.
@@ -895,7 +883,7 @@ def _coefficient_panels(
 def _family_name(mechanism: Mechanism) -> str:
     if mechanism.family == "linkage":
         return "Spherical linkage" if mechanism.space == "sphere" else "Planar linkage"
-    return FAMILY_NAMES.get(mechanism.family, type(mechanism).__name__)
+    return family_of(mechanism).display
 
 
 HEADLINES = {

@@ -33,12 +33,12 @@ from linkwright.analysis import transmission_angle
 from linkwright.engine import Motion, evaluate
 from linkwright.geometry import plane
 from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, circuit, circuits
+from linkwright.mechanisms.registry import family_of
 
 __all__ = ["draw_linkage", "plot_curves", "plot_diagrams", "save_figure"]
 
 Array = NDArray[np.float64]
 
-FAMILY_NAMES = {"fourbar": "Four-bar", "slidercrank": "Slider-crank"}
 MINUS = "\N{MINUS SIGN}"
 
 # Colours and styles (one palette for every picture).
@@ -76,7 +76,7 @@ def _require_single(mechanism: Mechanism) -> None:
 
 
 def _family_name(mechanism: Mechanism) -> str:
-    return FAMILY_NAMES.get(mechanism.family, type(mechanism).__name__)
+    return family_of(mechanism).display
 
 
 def _sign_label(sign: float) -> str:

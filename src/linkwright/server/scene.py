@@ -40,9 +40,9 @@ from linkwright.io import (
     topology,
 )
 from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS, WORKING_RANGE
-from linkwright.mechanisms import Mechanism, solve
+from linkwright.mechanisms import Mechanism, registry, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
-from linkwright.plot.diagrams import FAMILY_NAMES, DiagramError, diagram_series
+from linkwright.plot.diagrams import DiagramError, diagram_series
 from linkwright.plot.view import range_text
 from linkwright.server import budget
 from linkwright.server.limits import SAMPLES, check_document
@@ -61,26 +61,12 @@ __all__ = [
 DIAGRAM_KINDS = ("angles", "velocity", "acceleration")
 """The diagrams a scene carries (paper 003's coefficients stay with ``linkwright plot``)."""
 
-FAMILY_EXAMPLES = {
-    "fourbar": "crank-rocker",
-    "slidercrank": "offset-slider-crank",
-    "geared-fivebar": "geared-fivebar",
-    "doubleslider": "elliptic-trammel",
-    "watt1": "watt1-example",
-    "watt2": "watt2-example",
-    "stephenson1": "stephenson1-example",
-    "stephenson3": "stephenson3-example",
-    "spherical-fourbar": "paper000-fig6-crank-rocker",
-    "spherical-sixbar": "paper000-fig8-sixbar",
-    "spherical-stephenson3": "paper001-stephenson3",
-    "linkage": "jansen-leg",
-}
-"""The bundled example each family opens with."""
+FAMILY_EXAMPLES = {f.name: f.example for f in registry.families()}
+"""The bundled example each family opens with (the registry's)."""
 
 MAX_MODES = 4
 """Assembly modes drawn: every combination of up to two sign fields (2 × 2)."""
 
-_SPHERE_FAMILIES = ("spherical-fourbar", "spherical-sixbar", "spherical-stephenson3")
 _MINUS = "−"
 
 # Field kinds the page edits as numbers, and how it labels them.
@@ -104,25 +90,22 @@ class DragError(ValueError):
 
 
 def _family_name(family: str, space: str) -> str:
-    if family == "linkage":
-        return "Composed linkage (sphere)" if space == "sphere" else "Composed linkage"
-    return FAMILY_NAMES.get(family, family)
+    name = registry.family(family).display
+    return f"{name} (sphere)" if family == "linkage" and space == "sphere" else name
 
 
 def families() -> list[dict[str, Any]]:
-    """Every family, its name, its space and the example it opens with."""
-    out = []
-    for family in FAMILY_SPECS:
-        space = "sphere" if family in _SPHERE_FAMILIES else "plane"
-        out.append(
-            {
-                "family": family,
-                "name": _family_name(family, space),
-                "space": space,
-                "example": FAMILY_EXAMPLES.get(family),
-            }
-        )
-    return out
+    """Every family: its name, group, space and the example it opens with (the registry)."""
+    return [
+        {
+            "family": f.name,
+            "name": f.display,
+            "group": f.group,
+            "space": "sphere" if f.space == "sphere" else "plane",
+            "example": f.example,
+        }
+        for f in registry.families()
+    ]
 
 
 def family_document(family: str) -> dict[str, Any]:
@@ -275,7 +258,7 @@ def _number(x: float) -> float | None:
 def _space(doc: Document) -> str:
     """The document's space, read from the document: a mechanism without a construction plan
     (a spherical Stephenson III driven at FG) cannot tell its own."""
-    if doc.family in _SPHERE_FAMILIES:
+    if registry.family(doc.family).space == "sphere":
         return "sphere"
     return str(doc.raw["mechanism"].get("space", "plane"))
 

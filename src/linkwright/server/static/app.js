@@ -460,21 +460,23 @@
   function fillChoosers() {
     const fam = $("family-select");
     fam.innerHTML = "";
-    const planar = document.createElement("optgroup");
-    planar.label = "Planar";
-    const sph = document.createElement("optgroup");
-    sph.label = "Spherical";
+    // Families come grouped and in order from the server's family registry.
+    const byGroup = new Map();
     for (const f of state.families) {
-      const o = new Option(f.name, f.family);
-      (f.space === "sphere" ? sph : planar).appendChild(o);
+      if (!byGroup.has(f.group)) {
+        const og = document.createElement("optgroup");
+        og.label = f.group;
+        byGroup.set(f.group, og);
+        fam.appendChild(og);
+      }
+      byGroup.get(f.group).appendChild(new Option(f.name, f.family));
     }
-    if (planar.children.length) fam.appendChild(planar);
-    if (sph.children.length) fam.appendChild(sph);
 
     const ex = $("example-select");
     ex.innerHTML = "";
     ex.appendChild(new Option("— choose an example —", ""));
     const famName = Object.fromEntries(state.families.map((f) => [f.family, f.name]));
+    const famGroup = Object.fromEntries(state.families.map((f) => [f.family, f.group]));
     const groups = new Map();
     const isPaper = (e) => /^paper\d/.test(e.name) || /\bpaper\s*\d/i.test(e.title || "");
     const add = (g, e) => {
@@ -482,13 +484,9 @@
       groups.get(g).push(e);
     };
     for (const e of state.examples) {
-      if (isPaper(e)) add("From the papers", e);
-      else if (e.space === "sphere") add("Spherical", e);
-      else if (e.family === "fourbar") add("Four-bars", e);
-      else if (["watt1", "watt2", "stephenson1", "stephenson3"].includes(e.family)) add("Six-bars", e);
-      else add(e.family === "linkage" ? "Free linkages" : "Other planar", e);
+      add(isPaper(e) ? "From the papers" : famGroup[e.family] || "Other", e);
     }
-    const order = ["From the papers", "Four-bars", "Six-bars", "Other planar", "Free linkages", "Spherical"];
+    const order = ["From the papers", ...new Set(state.families.map((f) => f.group))];
     for (const g of order.concat([...groups.keys()].filter((k) => !order.includes(k)))) {
       if (!groups.has(g)) continue;
       const og = document.createElement("optgroup");
