@@ -1,7 +1,9 @@
 """One bundled example per family, the composed linkage once in the plane and once on the sphere.
 
 The picture, diagram, animation and CLI tests all run over these, and the README's gallery shows
-them (its file names are these keys).
+them (its file names are these keys). :data:`INPUT_EXAMPLES` adds the two linkages driven so
+that a triad remains; tests/test_family_verbs.py runs every verb on them and compares their
+gallery pictures.
 """
 
 from linkwright.server.scene import FAMILY_EXAMPLES as WORKBENCH_EXAMPLES
@@ -13,7 +15,21 @@ FAMILY_EXAMPLES = {
     "linkage-sphere": "paper000-fig6-linkage",
 }
 
+# Families driven elsewhere than at their crank, where a triad remains (key → example).
+INPUT_EXAMPLES = {
+    "stephenson3-output": "stephenson3-output",
+    "spherical-stephenson3-fg": "paper001-fg",
+}
+
+_FAMILY_OF_INPUT = {
+    "stephenson3-output": "stephenson3",
+    "spherical-stephenson3-fg": "spherical-stephenson3",
+}
+
 
 def family_of(key: str) -> str:
-    """The family a key names ("linkage-plane" → "linkage")."""
+    """The family a key names ("linkage-plane" → "linkage", "stephenson3-output" →
+    "stephenson3")."""
+    if key in _FAMILY_OF_INPUT:
+        return _FAMILY_OF_INPUT[key]
     return key.removesuffix("-plane").removesuffix("-sphere")

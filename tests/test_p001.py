@@ -17,8 +17,9 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from linkwright.engine.sphere_triad import sphere_triad_sweep
-from linkwright.mechanisms import SphericalStephenson3
-from linkwright.papers import p001
+from linkwright.io import load_example
+from linkwright.mechanisms import SphericalStephenson3, configurations, solve_all
+from linkwright.papers import p001, p001_circuits
 from linkwright.papers.p001_angles import triad_of
 
 DEG = p001.EXAMPLE
@@ -85,9 +86,12 @@ def test_reproduce_writes_the_page_tables_and_figures(tmp_path):
         "paper001-counts.svg",
         "paper001-configurations.png",
         "paper001-configurations.svg",
+        "paper001-circuits.csv",
+        "paper001-circuits.png",
+        "paper001-circuits.svg",
     }
     for path in written:
-        assert path.exists() and path.stat().st_size > 500
+        assert path.exists() and path.stat().st_size > 300
     assert (tmp_path / "paper001-counts.png").read_bytes()[:4] == b"\x89PNG"
     assert "<svg" in (tmp_path / "paper001-configurations.svg").read_text(encoding="utf-8")
     page = (tmp_path / "paper001.md").read_text(encoding="utf-8")
@@ -117,6 +121,16 @@ def test_reproduce_writes_the_page_tables_and_figures(tmp_path):
     with (tmp_path / "paper001-configurations.csv").open(encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
     assert len(rows) == 8
+
+    # Issue 21's example at FG: its counts, and one row per limit position of its circuits.
+    assert "## Driven at FG: the configurations followed over the input" in page
+    assert "It has 8, 4 and 6 configurations at θ6 = -90°, 0° and 120°." in page
+    with (tmp_path / "paper001-circuits.csv").open(encoding="utf-8") as handle:
+        joins = list(csv.DictReader(handle))
+    assert len(joins) == 10
+    for r in joins:
+        assert abs(int(r["configurations_below"]) - int(r["configurations_above"])) == 2
+        assert f"| {r['limit']} | {float(r['theta6_deg']):.4f} | " in page
 
 
 def test_the_configuration_table_is_eight_real_configurations():
@@ -313,3 +327,100 @@ def test_the_mechanism_helper():
     back = replace(mirror, sigma=-mirror.sigma)
     own = p001.example("AB")
     assert all(np.array_equal(getattr(back, k), getattr(own, k)) for k in p001.EXAMPLE)
+
+
+# ---------------------------------------------------------------------------------------------
+# Issue 21's example driven at FG: its counts, its circuits and where they join
+# ---------------------------------------------------------------------------------------------
+
+FG_ARCS = (71.1, 64.1, 68.6, 65.7, 69.0, 102.0, 74.1, 52.6, 19.7)  # issue 21, "Done when"
+FG_NAMES = ("a1", "a2", "a3", "a4", "a6", "sigma", "a7", "a8", "a9")
+
+
+def test_the_bundled_fg_example_is_issue_21s_with_8_4_and_6_configurations():
+    m = load_example("paper001-fg").mechanism
+    assert m.input == "FG"
+    assert [round(float(np.degrees(getattr(m, k))), 9) for k in FG_NAMES] == list(FG_ARCS)
+    theta = np.radians([-90.0, 0.0, 120.0])
+    assert p001_circuits.counts_at(m, [-90.0, 0.0, 120.0]) == [8, 4, 6]
+    # The same counts by an independent method: sign changes of the triad's closure swept
+    # around the circle of B (no polynomial, no plan).
+    assert sphere_triad_sweep(*triad_of(m, theta), grid=4096).count.tolist() == [8, 4, 6]
+    p = {k: np.radians(v) for k, v in zip(FG_NAMES, FG_ARCS, strict=True)}
+    found = solve_all(m, theta)
+    for i in range(3):
+        for k in range(int(found.count[i])):
+            b, c, e, f = (found.positions[j][i, k] for j in "BCEF")
+            assert _violation(p, b, c, e, f) < 1e-12
+
+
+def _turning(pos):
+    """The triad's closure, written from its constraints: the coupler BCE turning with angular
+    velocity w moves each joint X by w × X, which keeps its arc to its anchor K while
+    w · (X × K) = 0; the three rows (B × A, C × D, E × F) are singular where two
+    configurations meet. Normalised by the rows' lengths."""
+    rows = np.array([np.cross(pos["B"], pos["A"]), np.cross(pos["C"], pos["D"]),
+                     np.cross(pos["E"], pos["F"])])  # fmt: skip
+    return float(np.linalg.det(rows) / np.prod(np.linalg.norm(rows, axis=1)))
+
+
+def test_the_circuits_join_where_two_configurations_meet():
+    m = p001_circuits.fg_example()
+    found, joins = p001_circuits.circuit_joins(m)
+    assert [len(c.limits) for c in found] == [2, 6, 2]
+    assert len(joins) == sum(len(c.limits) for c in found)
+    p = {k: np.radians(v) for k, v in zip(FG_NAMES, FG_ARCS, strict=True)}
+    for join in joins:
+        theta = np.radians(join.input_deg)
+        poses = {
+            branches[0]: {j: v[0] for j, v in motion.positions.items()}
+            for branches, motion in configurations(m, [theta], order=0)
+            if motion.valid[0]
+        }
+        a, b = (poses[k] for k in join.poses)
+        # The two configurations are one there: their joints coincide (the limit is found to
+        # about 1e-10 rad, so they stand about its square root apart) and each closes every
+        # constraint; the triad's closure vanishes for them and not for the others.
+        gap = max(float(np.linalg.norm(a[j] - b[j])) for j in "BCE")
+        assert gap < 1e-4, (join, gap)
+        for pos in (a, b):
+            assert _violation(p, *(pos[j] for j in "BCEF")) < 1e-12
+            assert abs(_turning(pos)) < 1e-4, join
+        others = [abs(_turning(v)) for k, v in poses.items() if k not in join.poses]
+        assert others and min(others) > 1e-3, (join, others)
+        # Just beside it: two configurations more on one side than on the other.
+        below, above = solve_all(m, theta + np.radians([-1e-6, 1e-6])).count.tolist()
+        assert (below, above) == (join.below, join.above)
+        assert abs(below - above) == 2
+
+
+def test_each_fg_circuit_follows_one_configuration_between_its_limits():
+    """No branch jump: between limits, the configuration the circuit goes on to is the one
+    nearest to where it was heading (the last step carried on: the samples step evenly along
+    the joints' paths, even near a limit, where two configurations draw close), among every
+    configuration at the next input."""
+    m = p001_circuits.fg_example()
+    found, _ = p001_circuits.circuit_joins(m, samples=720)
+    for circuit in found:
+        motion = circuit.motion
+        x = np.concatenate([motion.positions[j] for j in "BCE"], axis=-1)
+        every = solve_all(m, motion.input)
+        xs = np.concatenate([every.positions[j] for j in "BCE"], axis=-1)
+        # A circuit's inputs run on past a turn; its limits are named within one.
+        wrapped = np.remainder(motion.input + np.pi, 2 * np.pi) - np.pi
+        limits = np.array([lim.input for lim in circuit.limits])
+        at_limit = np.any(np.abs(wrapped[:, None] - limits[None]) < 1e-12, axis=-1)
+        assert at_limit.sum() == len(limits)
+        n = len(x)
+        checked = 0
+        for k in range(n):
+            nxt = (k + 1) % n
+            if at_limit[k] or at_limit[nxt]:
+                continue  # a turn: the circuit goes on in the configuration it met there
+            heading = 2 * x[k] - x[k - 1]
+            d = np.linalg.norm(xs[nxt] - heading, axis=-1)
+            d = np.where(every.valid[nxt], d, np.inf)
+            own = float(np.linalg.norm(x[nxt] - heading))
+            assert own <= float(np.min(d)) + 1e-12, (k, own, np.sort(d)[:2])
+            checked += 1
+        assert checked >= n - 3 * len(circuit.limits)

@@ -35,7 +35,6 @@ from hypothesis import strategies as st
 
 from linkwright.engine.triad import (
     MAX_POSES,
-    circle_intersection,
     sweep_roots,
     triad_poses,
     triad_poses_sweep,
@@ -437,20 +436,6 @@ def test_sweep_roots_batched_and_bisected_to_the_last_bit():
     np.testing.assert_array_equal(found.count, [2, 2, 0])
     np.testing.assert_allclose(found.psi[:2], np.sort(targets[:2], axis=1), rtol=0, atol=4e-16)
     assert np.isnan(found.psi[2]).all()
-
-
-def test_circle_intersection_follows_the_engine_branch_convention():
-    rng = np.random.default_rng(5)
-    p1, p2 = rng.uniform(-1, 1, (2, 500, 2))
-    r1, r2 = rng.uniform(0.1, 1.5, (2, 500))
-    for sign in (1.0, -1.0):
-        p = circle_intersection(p1, r1, p2, r2, sign)
-        ok = np.isfinite(p).all(-1)
-        closes = (np.abs(r1 - r2) < _norm(p2 - p1)) & (_norm(p2 - p1) < r1 + r2)
-        np.testing.assert_array_equal(ok, closes)
-        np.testing.assert_allclose(_norm(p - p1)[ok], r1[ok], rtol=1e-12)
-        np.testing.assert_allclose(_norm(p - p2)[ok], r2[ok], rtol=1e-12)
-        assert (np.sign(_cross(p2 - p1, p - p1))[ok] == sign).all()
 
 
 # ----------------------------------------------------------------------------------------------

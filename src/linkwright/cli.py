@@ -255,7 +255,8 @@ def _ground_joints(mech: Mechanism) -> tuple[str, ...]:
 
 
 def unassembled_reason(mech: Mechanism, theta: float) -> str:
-    """Why the mechanism's first failing dyad cannot close at input ``theta`` (radians).
+    """Why the mechanism cannot be assembled at input ``theta`` (radians): the sentence of the
+    first step that fails where its parents are placed (the step kind's ``unassembled``).
 
     Examples
     --------
@@ -267,75 +268,9 @@ def unassembled_reason(mech: Mechanism, theta: float) -> str:
     >>> why
     'the coupler and rocker cannot reach (dyad B: |A B0| = 9 > coupler + rocker = 5)'
     """
-    import numpy as np
-
-    from linkwright.engine import DyadRRP, DyadRRR, SphereDyad
-    from linkwright.engine.evaluate import place_all
-    from linkwright.geometry import sphere
-
-    params = mech.params()
-    _, states = place_all(mech.plan, params, np.array([theta]), points=mech.points, order=0)
-
-    def value(p: Any) -> float:
-        return float(np.asarray(params[p] if isinstance(p, str) else p, dtype=float))
-
-    def word(p: Any) -> str:
-        return p if isinstance(p, str) else "link"
-
     head = "cannot be assembled at this input"
-    for dyad in mech.plan.dyads:
-        state = states[dyad.name]
-        if bool(np.all(state.valid)):
-            continue
-        if isinstance(dyad, DyadRRR):
-            p1, p2 = states[dyad.p1].pos[..., 0, :], states[dyad.p2].pos[..., 0, :]
-            d = float(np.hypot(*(p2 - p1)))
-            r1, r2 = value(dyad.r1), value(dyad.r2)
-            w1, w2 = word(dyad.r1), word(dyad.r2)
-            where = f"dyad {dyad.name}: |{dyad.p1} {dyad.p2}| = {d:.6g}"
-            if d == 0:
-                return f"{head}: the pivots {dyad.p1} and {dyad.p2} of dyad {dyad.name} coincide"
-            if d > r1 + r2:
-                return (
-                    f"{head}: the {w1} and {w2} cannot reach "
-                    f"({where} > {w1} + {w2} = {r1 + r2:.6g})"
-                )
-            return (
-                f"{head}: the {w1} and {w2} cannot fold that short "
-                f"({where} < |{w1} - {w2}| = {abs(r1 - r2):.6g})"
-            )
-        if isinstance(dyad, DyadRRP):
-            p1 = states[dyad.p1].pos[..., 0, :]
-            lp = states[dyad.line_point].pos[..., 0, :]
-            ang = value(dyad.line_angle)
-            off = abs(float(np.dot(p1 - lp, [-math.sin(ang), math.cos(ang)])))
-            w = word(dyad.r)
-            return (
-                f"{head}: the {w} cannot reach the slider's line "
-                f"(dyad {dyad.name}: {dyad.p1} is {off:.6g} from it > {w} = {value(dyad.r):.6g})"
-            )
-        if isinstance(dyad, SphereDyad):
-            p1, p2 = states[dyad.p1].pos[..., 0, :], states[dyad.p2].pos[..., 0, :]
-            d = math.degrees(float(sphere.arc(p1, p2)))
-            r1, r2 = math.degrees(value(dyad.r1)), math.degrees(value(dyad.r2))
-            w1, w2 = word(dyad.r1), word(dyad.r2)
-            where = f"dyad {dyad.name}: arc {dyad.p1}{dyad.p2} = {d:.6g}°"
-            if d == 0 or d == 180:
-                return (
-                    f"{head}: the axes {dyad.p1} and {dyad.p2} of dyad {dyad.name} are "
-                    "parallel, so no great circle joins them"
-                )
-            if d > min(r1 + r2, 360 - r1 - r2):
-                return (
-                    f"{head}: the {w1} and {w2} cannot reach ({where} > "
-                    f"min({w1} + {w2}, 360° - {w1} - {w2}) = {min(r1 + r2, 360 - r1 - r2):.6g}°)"
-                )
-            return (
-                f"{head}: the {w1} and {w2} cannot fold that short "
-                f"({where} < |{w1} - {w2}| = {abs(r1 - r2):.6g}°)"
-            )
-        return f"{head} (dyad {dyad.name})"
-    return head
+    why = mech.plan.unassembled(mech.params(), theta, points=mech.points)
+    return head if why is None else f"{head}: {why}"
 
 
 # --------------------------------------------------------------------------------------------
@@ -470,7 +405,8 @@ def _solve_triad(
             branches=found.branches,
             order=2,
         )
-    wanted = (int(np.asarray(mech.assembly)), int(np.asarray(mech.assembly2)))
+    pose = int(np.asarray(getattr(mech, "pose", 0)))
+    triad = mech.plan.triads[0].name if mech.plan.triads else None
     joints = mech.reported_joints
     samples = []
     for i, deg in enumerate(degrees):
@@ -488,22 +424,22 @@ def _solve_triad(
                 entry["acceleration"] = {j: _xy(rates.accelerations[j][i, k]) for j in joints}
             entries.append(entry)
         sample: dict[str, Any] = {"input_deg": float(deg), "configurations": entries}
-        if own:
-            # A sign of 0 is a configuration exactly at that dyad's limit: both branches meet.
-            same = [
+        if own and triad is not None:
+            # The document's configuration is its triad's pose index at this input (what the
+            # plan solves, and what plot --at and the workbench show).
+            mine = [
                 e
-                for e in entries
-                if all(s in (0, w) for s, w in zip(e["assembly"], wanted, strict=True))
+                for k, e in zip(np.flatnonzero(found.valid[i]), entries, strict=True)
+                if int(found.branches[triad][i, k]) == pose
             ]
-            sample["configurations"] = same[:1]
-            sample["matching"] = len(same)
-            if entries and not same:
+            sample["configurations"] = mine
+            if entries and not mine:
                 sample["reason"] = (
-                    f"no configuration with the document's assembly ({_signs(wanted)}) at this "
-                    f"input; {len(entries)} with other signs (solve --all lists them)"
+                    f"the triad has {len(entries)} pose(s) at this input, no pose {pose} "
+                    "(solve --all lists them)"
                 )
         if not entries:
-            sample["reason"] = "no real configuration at this input (the triad cannot close)"
+            sample["reason"] = unassembled_reason(mech, float(theta[i]))
         samples.append(sample)
     count = np.asarray(found.count)
     result: dict[str, Any] = {
@@ -511,27 +447,25 @@ def _solve_triad(
         "input": mech.input,
         "max_configurations": int(count.max()) if count.size else 0,
     }
-    if own:
-        result["assembly"] = list(wanted)
+    if own and triad is not None:
+        result["pose"] = pose
         result["rule"] = TRIAD_RULE[doc.family]
     result["samples"] = samples
     return result
 
 
-# How `solve` without --all picks the document's configuration of a triad: its two signs do not
-# single one out (the planar triad has up to 6 configurations, the spherical one 8, for 4 sign
-# pairs), so the first in the order solve_all returns them is taken, a rule that is stable
-# (the same input gives the same answer) but not a branch followed continuously.
+# How `solve` without --all picks the document's configuration of a triad: its pose index, the
+# one the plan solves. A name for one configuration at one input, stable (the same input gives
+# the same answer) but not a branch followed continuously (curve and plot follow those).
 TRIAD_RULE = {
     "stephenson3": (
-        "the configuration with the document's assembly and assembly2; where several share "
-        "them, the first in order of the coupler's angle (of B - A, from -180 to 180 degrees); "
-        "solve --all lists every configuration"
+        "the document's pose: the pose-th configuration at each input, in order of the "
+        "coupler's angle (of B - A, from -180 to 180 degrees); solve --all lists every "
+        "configuration"
     ),
     "spherical-stephenson3": (
-        "the configuration with the document's assembly and assembly2; where several share "
-        "them, the first in order of theta1 (angle BAD, from -180 to 180 degrees); solve --all "
-        "lists every configuration"
+        "the document's pose: the pose-th configuration at each input, in order of theta1 "
+        "(angle BAD, from -180 to 180 degrees); solve --all lists every configuration"
     ),
 }
 
@@ -613,6 +547,14 @@ def curve(
     ] = "input",
     as_csv: Annotated[bool, typer.Option("--csv", help="Print CSV.")] = False,
     as_json: JsonOpt = False,
+    every: Annotated[
+        bool,
+        typer.Option(
+            "--all",
+            help="Every circuit of every configuration (each assembly mode's; a triad's "
+            "configurations followed through their limits), numbered in a circuit column.",
+        ),
+    ] = False,
 ) -> None:
     """The path of the traced point P over the whole closed circuit."""
     if as_csv and as_json:
@@ -624,44 +566,82 @@ def curve(
     doc = _load(file)
     from linkwright.cli_budget import check_trace
 
-    # The answer holds each sample as Python numbers, and again as text.
-    check_trace(doc.mechanism, points, knob="--points", spacing=spacing, sample_bytes=400.0)
-    result = curve_document(doc, points, spacing=spacing)
+    if every or doc.mechanism.plan.triads:
+        _check_followed(doc.mechanism, points)
+    else:
+        # The answer holds each sample as Python numbers, and again as text.
+        check_trace(doc.mechanism, points, knob="--points", spacing=spacing, sample_bytes=400.0)
+    result = curve_document(doc, points, spacing=spacing, every=every)
     if as_json:
         sys.stdout.write(_dump(result))
         return
-    rows = zip(result["input_deg"], result["points"], result["assembly"], strict=True)
+    pieces = result["circuits"] if every else [result]
+    rows = [
+        (k, deg, xy, asm)
+        for k, piece in enumerate(pieces, start=1)
+        for deg, xy, asm in zip(piece["input_deg"], piece["points"], piece["assembly"], strict=True)
+    ]
     axes = _axes(doc.mechanism)
     if as_csv:
         from linkwright.io.exports import number_text
 
-        out = [f"input_deg,{','.join(axes)},assembly"]
-        for deg, xy, asm in rows:
+        out = [("circuit," if every else "") + f"input_deg,{','.join(axes)},assembly"]
+        for k, deg, xy, asm in rows:
             cells = [""] * len(axes) if xy is None else [number_text(c) for c in xy]
-            out.append(",".join([number_text(deg), *cells, number_text(asm)]))
+            first = [str(k)] if every else []
+            out.append(",".join([*first, number_text(deg), *cells, number_text(asm)]))
         sys.stdout.write("\n".join(out) + "\n")
         return
-    turn = "the input turns fully" if result["full_turn"] else "the input rocks between its limits"
-    out = [_heading(doc), f"# path of {result['joint']} over the closed circuit; {turn}"]
+    if every:
+        full = sum(p["full_turn"] for p in pieces)
+        about = (
+            f"# path of {result['joint']} over every circuit of every configuration: "
+            f"{len(pieces)} circuit{'s' if len(pieces) != 1 else ''}, {full} turning fully"
+        )
+    else:
+        turn = "turns fully" if result["full_turn"] else "rocks between its limits"
+        about = f"# path of {result['joint']} over the closed circuit; the input {turn}"
+    out = [_heading(doc), about]
     if len(axes) == 3:
         out.append("# on the unit sphere: each point is the unit vector of the joint's axis")
-    out.append(f"{'input_deg':>10} " + " ".join(f"{c:>11}" for c in axes) + f" {'assembly':>9}")
-    for deg, xy, asm in rows:
+    head = f"{'input_deg':>10} " + " ".join(f"{c:>11}" for c in axes) + f" {'assembly':>9}"
+    out.append(f"{'circuit':>7} {head}" if every else head)
+    for k, deg, xy, asm in rows:
         cells = [None] * len(axes) if xy is None else xy
-        out.append(f"{_fmt(deg, 10, 3)} {' '.join(_fmt(c) for c in cells)} {asm:>+9d}")
+        line = f"{_fmt(deg, 10, 3)} {' '.join(_fmt(c) for c in cells)} {asm:>+9d}"
+        out.append(f"{k:>7} {line}" if every else line)
     sys.stdout.write("\n".join(out) + "\n")
 
 
-def curve_document(doc: Document, points: int = 360, *, spacing: str = "input") -> dict[str, Any]:
-    """The ``curve`` command's JSON-ready result: the traced point over the closed circuit."""
+def _check_followed(mech: Mechanism, points: int, knob: str = "--points") -> None:
+    """Refuse tracing every circuit of every configuration over the command line's budget."""
+    from linkwright.engine import cost
+
+    shape = cost.Shape.of_mechanism(mech)
+    cost.check_combinations(shape)
+    cost.with_knob(lambda n: cost.follow(shape, n), cost.CLI, points, 2, knob).check(cost.CLI)
+
+
+def curve_document(
+    doc: Document, points: int = 360, *, spacing: str = "input", every: bool = False
+) -> dict[str, Any]:
+    """The ``curve`` command's JSON-ready result: the traced point over the closed circuit
+    (``every``: over every circuit of every configuration, each with its limit positions)."""
     import numpy as np
 
     from linkwright.io.documents import tidy_number
-    from linkwright.mechanisms import circuit, input_range
+    from linkwright.mechanisms import circuit, circuits, input_range
 
     mech = doc.mechanism
-    motion = circuit(mech, points, order=0, spacing=spacing)
-    if not bool(np.any(motion.valid)):
+    if every:
+        return _every_curve(doc, points, spacing)
+    if mech.plan.triads:
+        # Its circuits are found together (none where it never assembles): the first.
+        arcs, motions = circuits(mech, points, order=0, spacing=spacing)
+        motion = motions[0] if motions else None
+    else:
+        arcs, motion = None, circuit(mech, points, order=0, spacing=spacing)
+    if motion is None or not bool(np.any(motion.valid)):
         raise CliError(f"{doc.family}: the linkage cannot be assembled at any input")
     joint = mech.traced_joint
     # The first branching step's label: a dyad's sign, a triad's closure sign (both change
@@ -675,12 +655,62 @@ def curve_document(doc: Document, points: int = 360, *, spacing: str = "input") 
         "family": doc.family,
         "joint": joint,
         "closed": True,
-        "full_turn": bool(np.all(input_range(mech).full)),
+        "full_turn": bool(np.all((input_range(mech) if arcs is None else arcs).full)),
         "points": [_xy(p) for p in motion.positions[joint]],
         # Degrees as a person would write them: 30, not the 29.999999999999996 of a round trip.
         "input_deg": [tidy_number(float(d)) for d in np.degrees(motion.input)],
         "assembly": [int(b) for b in branch],
     }
+
+
+def _every_curve(doc: Document, points: int, spacing: str) -> dict[str, Any]:
+    """``curve --all``: every circuit of every configuration, followed by continuity through
+    the limit positions where two configurations meet (a dyad's branches, a triad's poses)."""
+    import numpy as np
+
+    from linkwright.engine.circuits import input_turns
+    from linkwright.engine.continuation import every_circuit
+    from linkwright.io.documents import tidy_number
+
+    mech = doc.mechanism
+    params = mech.params()
+    turns = int(np.max(input_turns(mech.plan, params, points=mech.points)))
+    found = every_circuit(
+        mech.plan,
+        params,
+        points,
+        points=mech.points,
+        order=0,
+        period=2.0 * np.pi * turns,
+        spacing=spacing,
+    )
+    if not found:
+        raise CliError(f"{doc.family}: the linkage cannot be assembled at any input")
+    joint = mech.traced_joint
+    pieces = []
+    for c in found:
+        motion = c.motion
+        first = next(iter(motion.labels), None)
+        branch = motion.labels[first] if first is not None else np.ones(motion.input.shape)
+        pieces.append(
+            {
+                "full_turn": c.full,
+                "points": [_xy(p) for p in motion.positions[joint]],
+                "input_deg": [tidy_number(float(d)) for d in np.degrees(motion.input)],
+                "assembly": [int(b) for b in np.broadcast_to(branch, motion.input.shape)],
+                # Where two configurations meet: the branch values (dyad signs, triad pose
+                # indices) met before and after the turn, as the circuit runs.
+                "limits": [
+                    {
+                        "input_deg": tidy_number(math.degrees(lim.input)),
+                        "before": {k: int(v) for k, v in lim.before.items()},
+                        "after": {k: int(v) for k, v in lim.after.items()},
+                    }
+                    for lim in c.limits
+                ],
+            }
+        )
+    return {"family": doc.family, "joint": joint, "closed": True, "circuits": pieces}
 
 
 @app.command()
@@ -958,6 +988,8 @@ def plot(
     from linkwright.cli_budget import check_drawing
 
     check_drawing(doc.mechanism, samples, knob="--samples", least=16, order=2)
+    if doc.mechanism.plan.triads:
+        _check_followed(doc.mechanism, samples, knob="--samples")
     from linkwright.plot import save_figure
     from linkwright.plot.diagrams import DiagramError, plot_diagram
     from linkwright.plot.view import PlotError, plot_mechanism
@@ -1029,6 +1061,8 @@ def export(
     from linkwright.cli_budget import check_drawing
 
     check_drawing(doc.mechanism, samples, knob="--samples", least=8)
+    if doc.mechanism.plan.triads:
+        _check_followed(doc.mechanism, samples, knob="--samples")
     from linkwright.io.exports import ExportError
     from linkwright.io.exports import export as write
 
@@ -1679,14 +1713,6 @@ def synth_precision_path(
 
 @synth_app.command("path")
 def synth_path(
-    family: Annotated[
-        str,
-        typer.Option(
-            "--family",
-            metavar="F",
-            help="fourbar, slidercrank, geared-fivebar or spherical-fourbar.",
-        ),
-    ],
     points: Annotated[
         Path,
         typer.Option(
@@ -1695,6 +1721,16 @@ def synth_path(
             help="Target points: rows x, y (x, y, z unit vectors on the sphere).",
         ),
     ],
+    family: Annotated[
+        str | None,
+        typer.Option(
+            "--family",
+            metavar="F",
+            help="Any family (fourbar, slidercrank, geared-fivebar, doubleslider, watt1, watt2, "
+            "stephenson1, stephenson3, linkage, spherical-fourbar, spherical-sixbar, "
+            "spherical-stephenson3); default the template's.",
+        ),
+    ] = None,
     angles: Annotated[
         str | None,
         typer.Option(
@@ -1741,6 +1777,15 @@ def synth_path(
     budget: Annotated[
         float, typer.Option("--budget", metavar="SECONDS", min=0.1, max=86_400.0)
     ] = 10.0,
+    template: Annotated[
+        str | None,
+        typer.Option(
+            "--template",
+            metavar="FILE",
+            help="A mechanism document: its family, structure and choices are kept and its "
+            "numbers start the search (needed for --family linkage).",
+        ),
+    ] = None,
     as_json: JsonOpt = False,
     quiet: QuietOpt = False,
 ) -> None:
@@ -1749,15 +1794,30 @@ def synth_path(
     import numpy as np
 
     from linkwright.synthesis.path import PathSynthesisError, fit_path
+    from linkwright.synthesis.path_models import ModelError, model_for
 
     if sum((angles is not None, free_timing, no_timing)) > 1:
         raise CliError("give at most one of --angles, --free-timing and --no-timing")
+    like = _load(template).mechanism if template is not None else None
+    if family is None and like is None:
+        raise CliError("--family: give a family, or a --template document to take it from")
+    family = family if family is not None else like.family  # type: ignore[union-attr]
+    if family == "linkage" and like is None:
+        raise CliError(
+            "--family linkage: a composed linkage's joints come from a document: give "
+            "--template FILE (its structure is kept, its numbers are free)"
+        )
+    try:
+        model = model_for(family, like)
+    except ModelError as exc:
+        raise CliError(str(exc)) from None
     timing = "prescribed" if angles is not None else "none" if no_timing else "free"
     pts = np.array(read_points(points, (2, 3)))
     given = np.radians(_floats(angles, "--angles", angle=True)) if angles is not None else None
+    in_degrees = ANGLE_BOUNDS | set(getattr(model, "angles", ()))
     bounds = {
         name: (math.radians(lo), math.radians(hi))
-        if name in ANGLE_BOUNDS or family == "spherical-fourbar"  # on the sphere: all angles
+        if name in in_degrees or model.space == "sphere"  # on the sphere: all angles
         else (lo, hi)
         for name, (lo, hi) in _bounds(bound or []).items()
     }
@@ -1771,12 +1831,17 @@ def synth_path(
             fit = fit_path(
                 family, pts, angles=given, timing=timing, closed=closed, bounds=bounds or None,
                 constraints=constraints, seed=seed, budget=budget, progress=progress,
+                template=like,
             )  # fmt: skip
     except PathSynthesisError as exc:
         raise CliError(str(exc)) from None
+    # A family with a triad on the sphere stands in its paper's frame (no composed linkage
+    # holds a triad): the rotation carries its curve onto the points.
+    own_frame = fit.rotation is not None and fit.mechanism is fit.named
     result = _documents({
         "error": fit.error,
         "rms": fit.rms,
+        **({"rotation": np.asarray(fit.rotation).tolist()} if own_frame else {}),
         "mechanism": fit.mechanism,
         "inputs_deg": np.degrees(fit.inputs),
         "angles_deg": np.degrees(fit.angles),
@@ -1794,6 +1859,13 @@ def synth_path(
         + "inputs (deg): "
         + ", ".join(f"{v:.6g}" for v in result["inputs_deg"])
         + "\n"
+        + (
+            "in its paper's frame: the points are R·(its traced point), R = "
+            + str(np.round(np.asarray(fit.rotation), 12).tolist())
+            + "\n"
+            if own_frame
+            else ""
+        )
         + _dumps_toml_mech(result["mechanism"])
         + "\n"
     )
@@ -1827,9 +1899,17 @@ AtlasFamilyOpt = Annotated[
 
 @atlas_app.command("build")
 def atlas_build(
-    family: AtlasFamilyOpt,
     count: Annotated[int, typer.Option("--count", metavar="N", min=1, help="Mechanisms.")],
     out: Annotated[Path, typer.Option("--out", metavar="DIR", help="The atlas directory.")],
+    family: Annotated[
+        str | None,
+        typer.Option(
+            "--family",
+            metavar="F",
+            help="Any family (fourbar, geared-fivebar, spherical-fourbar with their own "
+            "distributions; the others by their parameters); default the template's.",
+        ),
+    ] = None,
     seed: Annotated[int, typer.Option("--seed", metavar="S", min=0)] = 0,
     workers: Annotated[
         int | None,
@@ -1850,6 +1930,15 @@ def atlas_build(
     samples: Annotated[
         int, typer.Option("--samples", metavar="N", min=8, help="Curve samples per turn.")
     ] = 64,
+    template: Annotated[
+        str | None,
+        typer.Option(
+            "--template",
+            metavar="FILE",
+            help="A mechanism document whose structure and choices the atlas keeps (needed "
+            "for --family linkage; a Stephenson III's gives its input).",
+        ),
+    ] = None,
     as_json: JsonOpt = False,
     quiet: QuietOpt = False,
 ) -> None:
@@ -1857,11 +1946,20 @@ def atlas_build(
     curves in shards (Dask tasks) and index them. A killed build resumes where it stopped."""
     from linkwright.atlas import AtlasBuildError, build
 
+    like = _load(template).mechanism if template is not None else None
+    if family is None and like is None:
+        raise CliError("--family: give a family, or a --template document to take it from")
+    family = family if family is not None else like.family  # type: ignore[union-attr]
+    if family == "linkage" and like is None:
+        raise CliError(
+            "--family linkage: a composed linkage's joints come from a document: give "
+            "--template FILE (its structure is kept, its numbers are drawn about its own)"
+        )
     try:
         with _Progress("building", quiet) as progress:
             manifest = build(
                 family, count, out, seed=seed, shard_size=shard_size, samples=samples,
-                workers=workers, scheduler=scheduler, progress=progress,
+                workers=workers, scheduler=scheduler, progress=progress, template=like,
             )  # fmt: skip
     except AtlasBuildError as exc:
         raise CliError(str(exc)) from None

@@ -162,7 +162,7 @@ def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> di
         report["reason"] = (
             "some dyad cannot close at any input"
             if not plan.triads
-            else plan.triads[0].unassembled().replace("at this input", "at any input")
+            else f"{plan.triads[0].unassembled()} at any input"
         )
         report["transmission_angle_deg"] = {d.name: {"min": None, "max": None} for d in dyads}
         report["traced"] = {

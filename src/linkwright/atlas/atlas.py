@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.atlas import store
 from linkwright.atlas.build import AtlasBuildError, BuildSpec, build
-from linkwright.atlas.families import FAMILIES, PARAMS
+from linkwright.atlas.families import BUILDABLE, FAMILIES, PARAMS
 from linkwright.atlas.index import Index
 
 __all__ = ["DEFAULT_COUNTS", "Atlas", "AtlasError", "data_dir", "default_atlas", "open_atlas"]
@@ -46,18 +46,23 @@ class Atlas:
     def count(self) -> int:
         return int(self.manifest["spec"]["count"])
 
+    @property
+    def params(self) -> tuple[str, ...]:
+        """The names of a row's columns (the manifest's; a composed linkage's depend on it)."""
+        return tuple(self.manifest.get("params") or PARAMS[self.family])
+
     def designs(self, ids: ArrayLike) -> dict[str, NDArray[np.float64]]:
         """The stored parameters of entries ``ids`` (in the family's local frame), by name."""
         ids = np.asarray(ids, dtype=np.int64).ravel()
         if ids.size and (ids.min() < 0 or ids.max() >= self.count):
             raise AtlasError(f"ids: must lie in [0, {self.count}), got {ids.min()}…{ids.max()}")
         size = self.spec.shard_size
-        rows = np.empty((ids.size, len(PARAMS[self.family])))
+        rows = np.empty((ids.size, len(self.params)))
         shard = ids // size
         for s in np.unique(shard):
             at = shard == s
             rows[at] = store.read_shard(self.path, int(s))["params"][ids[at] - s * size]
-        return {k: rows[:, i] for i, k in enumerate(PARAMS[self.family])}
+        return {k: rows[:, i] for i, k in enumerate(self.params)}
 
     def descriptors(self) -> NDArray[np.float32]:
         """Every entry's descriptor (N, D), read from the shards."""
@@ -94,7 +99,7 @@ def open_atlas(path: str | os.PathLike[str], *, hashes: bool = False) -> Atlas:
     try:
         manifest = store.read_json(root / store.MANIFEST)
         spec = manifest.get("spec", {})
-        if spec.get("family") not in FAMILIES or spec.get("format") != 1:
+        if spec.get("family") not in BUILDABLE or spec.get("format") != 1:
             raise AtlasError(f"{root}: an atlas of an unknown family or format ({spec})")
         store.verify(root, manifest, hashes=hashes)
         kind, nprobe = manifest["index"]["kind"], int(manifest["index"]["nprobe"])

@@ -25,16 +25,20 @@ import numpy as np
 
 from linkwright.atlas import store
 from linkwright.atlas.families import (
+    BUILDABLE,
     FAMILIES,
-    PARAMS,
     AtlasFamilyError,
+    atlas_model,
     curves,
     describe,
     describe_variants,
+    params_of,
     sample,
 )
 from linkwright.atlas.index import Index
 from linkwright.engine import cost
+from linkwright.mechanisms import Mechanism
+from linkwright.mechanisms.parameters import ParameterError, decode, encode
 
 __all__ = [
     "DEFAULT_SHARD_SIZE",
@@ -58,7 +62,13 @@ class AtlasBuildError(ValueError):
 
 @dataclass(frozen=True)
 class BuildSpec:
-    """What an atlas holds; two builds with equal specs write byte-identical shards."""
+    """What an atlas holds; two builds with equal specs write byte-identical shards.
+
+    ``template`` is the template mechanism of a family without a hand-written distribution
+    (:func:`linkwright.mechanisms.parameters.encode`'s plain data): a composed linkage's
+    structure, a Stephenson III's input; None for the family's default (a composed linkage has
+    none).
+    """
 
     family: str
     count: int
@@ -67,12 +77,22 @@ class BuildSpec:
     samples: int = 64
     harmonics: int = 8
     format: int = FORMAT
+    template: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
-        if self.family not in FAMILIES:
+        if self.family not in BUILDABLE:
             raise AtlasBuildError(
-                f"--family: must be one of {', '.join(FAMILIES)}, got {self.family!r}"
+                f"--family: must be one of {', '.join(BUILDABLE)}, got {self.family!r}"
             )
+        if self.template is not None and self.family in FAMILIES:
+            raise AtlasBuildError(
+                f"--template: the {self.family} atlas has its own design distribution; a "
+                "template is for the other families"
+            )
+        try:
+            atlas_model(self.family, self.mechanism)
+        except (AtlasFamilyError, ParameterError, ValueError) as exc:
+            raise AtlasBuildError(str(exc)) from None
         checks = (
             ("count", self.count, 1),
             ("shard_size", self.shard_size, 1),
@@ -94,8 +114,21 @@ class BuildSpec:
         full, rest = divmod(self.count, self.shard_size)
         return [self.shard_size] * full + ([rest] if rest else [])
 
+    @property
+    def mechanism(self) -> Mechanism | None:
+        """The template as a mechanism (None: the family's default)."""
+        return None if self.template is None else decode(self.template)
+
+    @property
+    def params(self) -> tuple[str, ...]:
+        """The names of a row's columns."""
+        return params_of(self.family, self.mechanism)
+
     def as_dict(self) -> dict[str, Any]:
-        return asdict(self)
+        out = asdict(self)
+        if self.template is None:
+            del out["template"]  # atlases of the hand-written families read as they always did
+        return out
 
 
 def _rng(spec: BuildSpec, stream: int) -> np.random.Generator:
@@ -106,18 +139,26 @@ def make_shard(spec: BuildSpec, index: int) -> np.ndarray:
     """Shard ``index``'s rows: designs from the shard's own stream, their curves at
     ``spec.samples`` inputs and their descriptors (the Dask task; a pure function)."""
     size = spec.sizes[index]
-    params = sample(spec.family, _rng(spec, index), size)
-    desc = describe(spec.family, curves(spec.family, params, spec.samples), spec.harmonics)
+    template = spec.mechanism
+    try:
+        params = sample(spec.family, _rng(spec, index), size, template)
+    except AtlasFamilyError as exc:
+        raise AtlasBuildError(str(exc)) from None
+    traced = curves(spec.family, params, spec.samples, template)
+    desc = describe(spec.family, traced, spec.harmonics, template)
     if not np.all(np.isfinite(desc)):
         # The filter keeps only linkages that turn fully, so this is a bug, not bad luck.
         raise AtlasBuildError(f"shard {index}: a kept design traced no curve")
-    return store.shard_table(np.stack([params[k] for k in PARAMS[spec.family]], -1), desc)
+    return store.shard_table(np.stack([params[k] for k in spec.params], -1), desc)
 
 
 def query_designs(spec: BuildSpec, count: int = TUNING_QUERIES) -> dict[str, np.ndarray]:
     """Designs from the family's distribution but outside every shard's stream: the held-out
     queries the index is tuned and measured on."""
-    return sample(spec.family, _rng(spec, _QUERY_STREAM), count)
+    try:
+        return sample(spec.family, _rng(spec, _QUERY_STREAM), count, spec.mechanism)
+    except AtlasFamilyError as exc:
+        raise AtlasBuildError(str(exc)) from None
 
 
 def _in_process(spec: BuildSpec, todo: list[int]) -> Iterable[tuple[int, np.ndarray]]:
@@ -195,13 +236,14 @@ def build(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: Callable[[float], None] | None = None,
+    template: Mechanism | None = None,
 ) -> dict[str, Any]:
     """Build (or finish building) an atlas of ``count`` mechanisms of ``family`` in ``out``.
 
     Parameters
     ----------
-    family : ``"fourbar"``, ``"geared-fivebar"`` or ``"spherical-fourbar"``
-        (:mod:`linkwright.atlas.families` states each one's design distribution).
+    family : any registered family (:data:`~linkwright.atlas.families.BUILDABLE`);
+        :mod:`linkwright.atlas.families` states each one's design distribution.
     count : mechanisms in the atlas (all of them turn fully).
     out : the atlas directory (created).
     seed : the same seed gives the same shards, whatever ``workers`` or ``scheduler``.
@@ -211,6 +253,10 @@ def build(
         the machine's cores, or this process for a single shard.
     scheduler : address of a running Dask scheduler (its workers need linkwright installed).
     progress : called with the fraction done, in [0, 1].
+    template : for a family other than the four-bar, the geared five-bar and the spherical
+        four-bar, the mechanism whose structure and choices the atlas keeps (a composed
+        linkage needs one; a Stephenson III's gives its input); its numbers are not used,
+        except a composed linkage's, about which its designs are drawn.
 
     Returns
     -------
@@ -225,8 +271,9 @@ def build(
         different atlas.
     """
     try:
-        spec = BuildSpec(family, count, seed, shard_size, samples, harmonics)
-    except AtlasFamilyError as exc:
+        encoded = None if template is None else encode(template)
+        spec = BuildSpec(family, count, seed, shard_size, samples, harmonics, template=encoded)
+    except (AtlasFamilyError, ParameterError) as exc:
         raise AtlasBuildError(str(exc)) from None
     try:
         # Bounded here, not in BuildSpec: an atlas built before a budget changed still opens.
@@ -298,8 +345,9 @@ def _build_locked(
     index = Index.build(blocks)
     queries = describe_variants(
         family,
-        curves(family, query_designs(spec), spec.samples),
+        curves(family, query_designs(spec), spec.samples, spec.mechanism),
         spec.harmonics,
+        spec.mechanism,
     )
     recall = index.tune(blocks, queries.reshape(-1, queries.shape[-1]), queries.shape[-2])
     index.save(root / store.INDEX)
@@ -308,7 +356,7 @@ def _build_locked(
         progress(1.0)
     manifest = {
         "spec": spec.as_dict(),
-        "params": list(PARAMS[family]),
+        "params": list(spec.params),
         "shards": [{"count": sizes[i], "sha256": digests[i]} for i in range(len(sizes))],
         "descriptor_size": int(blocks[0].shape[1]),
         "index": {

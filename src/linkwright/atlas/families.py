@@ -27,6 +27,35 @@ the way round: the closure margin of :func:`~linkwright.synthesis.path_families.
 sampled at 256 inputs, at least :data:`MARGIN`. One turn of the input then traces the whole
 coupler curve, a closed curve (the five-bar's gear ratios are whole numbers, so it closes after
 one turn too).
+
+Every other registered family (:data:`BUILDABLE`: the slider-crank, the double slider, the
+six-bars, a composed linkage, the spherical six-bars) is sampled through its parameter vector
+(:mod:`linkwright.mechanisms.parameters`) and its search model
+(:class:`~linkwright.synthesis.path_models.GenericModel`), in the model's local frame (first
+ground pivot at the origin, reference direction along +x; the second ground pivot at (1, 0)
+where the reference is the line to it), each number by its kind:
+
+=====================  =======================================================================
+kind                   distribution
+=====================  =======================================================================
+length                 log-uniform on [0.2, 5]
+coordinate             U(−2, 2) (a pivot's place, a point's place on its link, a signed length)
+angle                  U(−180°, 180°) (an axis's latitude: uniform on the sphere)
+arc                    U(10°, 170°); a point's arc from its joint U(0°, 90°)
+ratio                  the template's (a gear ratio is chosen, not drawn)
+configuration          each combination of the plan's branches (assembly signs, a triad's pose
+                       at the input 0) alike
+=====================  =======================================================================
+
+A composed linkage keeps its template's structure and configuration, and its numbers are drawn
+about the template's own (normalised): lengths × e^N(0, 0.2), coordinates and angles
++ N(0, 0.2), arcs + N(0, 0.1 rad); drawn from the whole box, almost none of a linkage of many
+dyads would assemble. Each draw is normalised (:meth:`~linkwright.mechanisms.parameters.
+ParameterVector.normalise`: scale 1) and kept when every sample of a turn (256) assembles on its
+configuration with every dyad's closure margin (a triad's closure) at least :data:`MARGIN`, and
+(a triad's configuration being followed) the turn ends where it began. A family of which too few
+draws turn fully (fewer than ``count`` in :data:`ROUNDS` rounds) is refused, naming the share
+kept.
 """
 
 from __future__ import annotations
@@ -43,29 +72,45 @@ from linkwright.curves import (
     sphere_descriptors,
 )
 from linkwright.engine import kernels
-from linkwright.mechanisms import solve
-from linkwright.synthesis.path_families import MODELS, path_margin
+from linkwright.mechanisms import FAMILIES as REGISTERED
+from linkwright.mechanisms import Mechanism, solve
+from linkwright.mechanisms.parameters import ParameterError, family_template
+from linkwright.synthesis.path_families import MODELS, Model, path_margin
+from linkwright.synthesis.path_models import GenericModel, ModelError, model_for
 
 __all__ = [
+    "BUILDABLE",
     "FAMILIES",
     "MARGIN",
     "PARAMS",
+    "ROUNDS",
     "AtlasFamilyError",
+    "atlas_model",
     "curves",
     "describe",
     "describe_variants",
+    "params_of",
     "sample",
+    "space_of",
 ]
 
 Array = NDArray[np.float64]
 
 FAMILIES = ("fourbar", "geared-fivebar", "spherical-fourbar")
+"""The families with a hand-written design distribution (the table above) and a built-in atlas."""
+BUILDABLE = tuple(REGISTERED)
+"""Every family an atlas can be built of: the registered families."""
 PARAMS: dict[str, tuple[str, ...]] = {f: MODELS[f].shape_names + ("assembly",) for f in FAMILIES}
 MARGIN = 0.01
 """Least closure margin kept (a fraction of the dyad's range; see the module docstring)."""
 
 _GEAR_RATIOS = np.array([-2.0, -1.0, 1.0, 2.0])
 _CHECK_SAMPLES = 256
+ROUNDS = 64
+"""Rounds of draws a generic family gets to yield ``count`` designs that turn fully: each round
+draws ``count`` designs, and at least 2,048 (256 with a triad, whose checks cost more)."""
+CODE = "configuration"
+"""The column of a generic family's row that holds its configuration code."""
 
 
 class AtlasFamilyError(ValueError):
@@ -73,9 +118,36 @@ class AtlasFamilyError(ValueError):
 
 
 def _family(family: str) -> str:
-    if family not in FAMILIES:
-        raise AtlasFamilyError(f"family: must be one of {', '.join(FAMILIES)}, got {family!r}")
+    if family not in BUILDABLE:
+        raise AtlasFamilyError(f"family: must be one of {', '.join(BUILDABLE)}, got {family!r}")
     return family
+
+
+def atlas_model(family: str, template: Mechanism | None = None) -> Model | GenericModel:
+    """The model an atlas of ``family`` samples and places through (a composed linkage's needs
+    its template)."""
+    _family(family)
+    try:
+        if family in FAMILIES:
+            return model_for(family)
+        if template is not None and template.family != family:
+            raise ModelError(f"template: a {template.family} mechanism, not a {family}")
+        return GenericModel(template if template is not None else family_template(family))
+    except (ModelError, ParameterError) as exc:
+        raise AtlasFamilyError(str(exc)) from None
+
+
+def params_of(family: str, template: Mechanism | None = None) -> tuple[str, ...]:
+    """The names of an atlas row's columns: the shape parameters, then the assembly sign (or a
+    generic family's configuration code)."""
+    if family in PARAMS:
+        return PARAMS[family]
+    return atlas_model(family, template).shape_names + (CODE,)
+
+
+def space_of(family: str, template: Mechanism | None = None) -> str:
+    """``"plane"`` or ``"sphere"``: where the family's curves lie."""
+    return atlas_model(family, template).space
 
 
 def _log_uniform(rng: np.random.Generator, lo: float, hi: float, n: int) -> Array:
@@ -147,7 +219,9 @@ def _turns_fully(family: str, shape: Mapping[str, Array]) -> NDArray[np.bool_]:
     return ok
 
 
-def sample(family: str, rng: np.random.Generator, count: int) -> dict[str, Array]:
+def sample(
+    family: str, rng: np.random.Generator, count: int, template: Mechanism | None = None
+) -> dict[str, Array]:
     """``count`` designs of ``family`` from its distribution, keeping only those whose input
     turns fully (module docstring). Draws rounds of ``count`` candidates until enough are kept,
     so the result depends on ``rng``'s state alone.
@@ -171,6 +245,8 @@ def sample(family: str, rng: np.random.Generator, count: int) -> dict[str, Array
     _family(family)
     if count < 0:
         raise AtlasFamilyError(f"count: must not be negative, got {count}")
+    if family not in FAMILIES:
+        return _sample_generic(atlas_model(family, template), rng, count)  # type: ignore[arg-type]
     kept: list[dict[str, Array]] = []
     total = 0
     while total < count:
@@ -182,7 +258,9 @@ def sample(family: str, rng: np.random.Generator, count: int) -> dict[str, Array
     return out
 
 
-def curves(family: str, params: Mapping[str, Array], samples: int) -> Array:
+def curves(
+    family: str, params: Mapping[str, Array], samples: int, template: Mechanism | None = None
+) -> Array:
     """The coupler curves (n, samples, 2), or unit vectors (n, samples, 3) on the sphere, of
     the designs ``params`` in the local frame, at ``samples`` inputs equally spaced over one
     turn from the frame line. NaN where a design does not assemble.
@@ -199,6 +277,14 @@ def curves(family: str, params: Mapping[str, Array], samples: int) -> Array:
     array([1., 1., 1., 1., 1., 1., 1., 1.])
     """
     _family(family)
+    if family not in FAMILIES:
+        model = atlas_model(family, template)
+        names = params_of(family, template)
+        p = {k: np.atleast_1d(np.asarray(params[k], dtype=float)) for k in names}
+        code = p.pop(CODE)
+        turns = model.turns  # type: ignore[union-attr]
+        theta = np.linspace(0.0, 2.0 * np.pi * turns, samples, endpoint=False)
+        return model.evaluate(p, code, theta, around=False)[0]  # type: ignore[union-attr]
     p = {k: np.atleast_1d(np.asarray(params[k], dtype=float)) for k in PARAMS[family]}
     theta = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
     n = p["assembly"].shape[0]
@@ -214,15 +300,126 @@ def curves(family: str, params: Mapping[str, Array], samples: int) -> Array:
     return solve(mech, theta, order=0).positions["P"]
 
 
-def describe(family: str, points: Array, harmonics: int) -> Array:
+def describe(
+    family: str, points: Array, harmonics: int, template: Mechanism | None = None
+) -> Array:
     """Descriptors of closed curves traced by ``family`` (planar or spherical)."""
-    if MODELS[_family(family)].space == "sphere":
+    if space_of(_family(family), template) == "sphere":
         return sphere_descriptors(points, harmonics=harmonics)
     return descriptors(points, harmonics=harmonics)
 
 
-def describe_variants(family: str, points: Array, harmonics: int) -> Array:
+def describe_variants(
+    family: str, points: Array, harmonics: int, template: Mechanism | None = None
+) -> Array:
     """Every descriptor variant (…, V, D) of closed curves, for queries."""
-    if MODELS[_family(family)].space == "sphere":
+    if space_of(_family(family), template) == "sphere":
         return sphere_descriptor_variants(points, harmonics=harmonics)
     return descriptor_variants(points, harmonics=harmonics)
+
+
+# --------------------------------------------------------------------------------------------
+# Every other family, through its parameter vector
+# --------------------------------------------------------------------------------------------
+
+
+def _draw_generic(model: GenericModel, rng: np.random.Generator, n: int) -> dict[str, Array]:
+    """n designs of a generic family from its distribution (module docstring), unfiltered."""
+    v = model.vector
+    around = None
+    if model.family == "linkage":
+        own = v.to_vector(v.normalise(model.template))
+        around = {name: float(own[i]) for i, name in enumerate(v.names)}
+    out: dict[str, Array] = {}
+    for name in model.shape_names:
+        p = v.parameter(name)
+        gauge = name in model.lengths and p.kind in ("coordinate", "angle")
+        if around is not None:
+            t = around[name]
+            if p.kind == "length" or (gauge and p.kind == "coordinate"):
+                out[name] = t * np.exp(rng.normal(0.0, 0.2, n))
+            elif p.kind == "arc" or gauge:
+                hi = np.pi if p.closed else np.radians(178.0)
+                lo = 0.0 if p.closed else np.radians(2.0)
+                out[name] = np.clip(t + rng.normal(0.0, 0.1, n), lo, hi)
+            elif p.kind == "ratio":
+                out[name] = np.full(n, t)
+            else:
+                out[name] = t + rng.normal(0.0, 0.2, n)
+        elif gauge and p.kind == "coordinate":
+            out[name] = np.ones(n)  # the second ground pivot at (1, 0): the unit of length
+        elif p.kind == "length":
+            out[name] = _log_uniform(rng, 0.2, 5.0, n)
+        elif p.kind == "coordinate":
+            out[name] = rng.uniform(-2.0, 2.0, n)
+        elif p.kind == "arc" or gauge:
+            hi = np.pi / 2 if p.closed else np.radians(170.0)
+            out[name] = rng.uniform(0.0 if p.closed else np.radians(10.0), hi, n)
+        elif p.kind == "ratio":
+            out[name] = np.full(n, float(np.asarray(v.to_vector(model.template))[v.index(name)]))
+        elif p.component == 1 and p.absolute:  # an axis's latitude: uniform on the sphere
+            out[name] = np.arcsin(rng.uniform(-1.0, 1.0, n))
+        else:
+            out[name] = rng.uniform(-np.pi, np.pi, n)
+    if model.family == "linkage":
+        out[CODE] = np.zeros(n)
+    else:
+        out[CODE] = rng.integers(0, len(model.combos), n).astype(float)
+    return out
+
+
+def _generic_turns_fully(model: GenericModel, draw: Mapping[str, Array], samples: int):
+    """Which draws assemble at every sample of a turn on their configuration, every closure
+    margin at least MARGIN, and (followed through a triad) end the turn where they began."""
+    shape = {k: v for k, v in draw.items() if k != CODE}
+    theta = np.linspace(0.0, 2.0 * np.pi * model.turns, samples + 1)
+    # Forwards only: a full turn is one branch run from the input 0 round to 2π.
+    _, valid, motion = model.evaluate(shape, draw[CODE], theta, around=False)
+    ok = valid.all(axis=1)
+    triads = {t.name for t in model.triads}
+    for name in model.branch_steps:
+        m = motion.margins[name]
+        m = np.abs(m) if name in triads else m
+        ok &= np.min(np.where(np.isfinite(m), m, -1.0), axis=1) >= MARGIN
+    if triads:
+        size = max(float(np.nanmax(np.abs(p))) for p in motion.positions.values())
+        for p in motion.positions.values():
+            ok &= np.all(np.abs(p[:, 0] - p[:, -1]) <= 1e-7 * max(size, 1.0), axis=-1)
+    return ok
+
+
+def _sample_generic(model: GenericModel, rng: np.random.Generator, count: int) -> dict[str, Array]:
+    names = model.shape_names + (CODE,)
+    kept: list[dict[str, Array]] = []
+    total = drawn = 0
+    size = max(count, 256 if model.triads else 2048)
+    for _ in range(ROUNDS):
+        if total >= count:
+            break
+        draw = _draw_generic(model, rng, size)
+        drawn += size
+        ok = _generic_turns_fully(model, draw, 16)
+        if ok.any():
+            sub = {k: v[ok] for k, v in draw.items()}
+            ok2 = _generic_turns_fully(model, sub, _CHECK_SAMPLES)
+            kept.append(_normalised(model, {k: v[ok2] for k, v in sub.items()}))
+            total += int(ok2.sum())
+    if total < count:
+        raise AtlasFamilyError(
+            f"{model.family}: only {total} of {drawn} designs drawn turn fully clear of their "
+            f"limit positions, fewer than the {count} asked for; ask for fewer"
+            + (" or give a template that turns fully" if model.family == "linkage" else "")
+        )
+    return {k: np.concatenate([d[k] for d in kept])[:count] for k in names}
+
+
+def _normalised(model: GenericModel, draw: Mapping[str, Array]) -> dict[str, Array]:
+    """The draws in the vector's canonical place (scale 1); the configuration as it was."""
+    if len(draw[CODE]) == 0:
+        return dict(draw)
+    shape = {k: v for k, v in draw.items() if k != CODE}
+    mech = model.vector.normalise(model.local(shape, draw[CODE]))
+    x = model.vector.to_vector(mech)
+    out = {name: x[..., model.vector.index(name)] for name in model.shape_names}
+    out[CODE] = draw[CODE]
+    return out

@@ -21,6 +21,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,11 +29,12 @@ from scipy.optimize import least_squares
 from scipy.spatial import cKDTree
 
 from linkwright.atlas.atlas import Atlas
-from linkwright.atlas.families import curves, describe_variants
+from linkwright.atlas.families import CODE, atlas_model, curves, describe_variants
 from linkwright.curves import align, sphere_align
 from linkwright.engine import cost
 from linkwright.mechanisms import Mechanism, solve
-from linkwright.synthesis.path_families import MODELS, rodrigues, sphere_rotation
+from linkwright.synthesis.path_families import Model, rodrigues, sphere_rotation
+from linkwright.synthesis.path_models import GenericModel
 
 __all__ = ["AtlasQueryError", "Match", "query"]
 
@@ -119,39 +121,70 @@ def _to_sphere_pose(R: Array) -> tuple[float, float, float]:
     return lon, float(np.clip(a0[2], -1.0, 1.0)), float(np.arctan2(t @ north, t @ east))
 
 
-def _placed_params(family: str, design: dict[str, float], fit, k: int) -> dict[str, float]:
+def _placed_params(model: Any, design: dict[str, float], fit, k: int) -> dict[str, float]:
     """The atlas design ``design`` carried by alignment ``fit`` (entry k) into the query frame,
     as fit_path's parameters."""
-    model = MODELS[family]
     out = dict(design)
     if model.space == "sphere":
         lon, sinlat, spin = _to_sphere_pose(fit.rotation[k])
         out.update(lon=lon, sinlat=sinlat, spin=spin)
         return out
     s = float(fit.scale[k])
-    for name in model.lengths + ("u", "v"):
-        out[name] = design[name] * s
+    for name in model.linear:
+        if name in design:
+            out[name] = design[name] * s
     tx, ty = (float(c) for c in fit.translation[k])
     out.update(x=tx, y=ty, frame_angle=float(fit.rotation[k]))
     return out
 
 
-def _mechanisms(family: str, params: dict[str, float]) -> tuple[Mechanism, Mechanism]:
-    model = MODELS[family]
-    shape = {k: params[k] for k in model.shape_names}
-    if model.space == "sphere":
-        pose = sphere_rotation(
-            np.array(params["lon"]), np.array(params["sinlat"]), np.array(params["spin"])
-        )
-    else:
-        pose = (params["x"], params["y"], params["frame_angle"])
-    user, named, _ = model.placed(shape, params["assembly"], pose)
-    return user, named
+def _code(params: dict[str, float]) -> float:
+    """The row's assembly sign (or a generic family's configuration code)."""
+    return params["assembly"] if "assembly" in params else params[CODE]
 
 
-def _traced(mechanism: Mechanism, samples: int) -> Array:
-    theta = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
-    return solve(mechanism, theta, order=0).positions["P"]
+class _Placed:
+    """A design placed in the query's frame: its linkage (user's frame and the family's own)
+    and its traced point at any inputs, on the design's configuration."""
+
+    def __init__(self, model: Any, params: dict[str, float], pose: Any = None) -> None:
+        self.model = model
+        shape = {k: params[k] for k in model.shape_names}
+        if pose is None:
+            if model.space == "sphere":
+                pose = sphere_rotation(
+                    np.array(params["lon"]), np.array(params["sinlat"]), np.array(params["spin"])
+                )
+            else:
+                pose = (params["x"], params["y"], params["frame_angle"])
+        self.code = _code(params)
+        self.user, self.named, self.rotation = model.placed(shape, self.code, pose)
+        self.turns = getattr(model, "turns", 1)
+        self.offset = 0.0
+        if isinstance(model, GenericModel):
+            self.offset = model.input_offset(pose)
+            self.local = model.local(shape, self.code)
+            if model.space == "sphere":
+                R = np.asarray(pose, dtype=float)
+                self.transform = lambda p: np.asarray(p) @ R.T
+            else:
+                x, y, a = (float(v) for v in pose)
+                c, n = np.cos(a), np.sin(a)
+                self.transform = lambda p: np.stack(
+                    (x + c * p[..., 0] - n * p[..., 1], y + n * p[..., 0] + c * p[..., 1]), -1
+                )
+
+    def points(self, inputs: Array) -> Array:
+        if isinstance(self.model, Model):
+            return solve(self.user, inputs, order=0).positions["P"]
+        return self.model.reach(
+            self.user, self.local, self.code, inputs, self.offset, self.transform
+        )[0]
+
+    def curve(self, samples: int) -> tuple[Array, Array]:
+        """Inputs over one period of the input (from the frame's 0) and the traced points."""
+        theta = self.offset + np.linspace(0.0, 2.0 * np.pi * self.turns, samples, endpoint=False)
+        return theta, self.points(theta)
 
 
 def _distance(points: Array, curve: Array) -> float:
@@ -213,7 +246,8 @@ def query(
         For points that are not a curve of this atlas's space, or bad counts.
     """
     family = atlas.family
-    model = MODELS[family]
+    template = atlas.spec.mechanism
+    model = atlas_model(family, template)
     q = _query_points(model.space, points)
     if not (isinstance(top, int) and top >= 1):
         raise AtlasQueryError(f"top: must be a whole number ≥ 1, got {top!r}")
@@ -222,22 +256,22 @@ def query(
         raise AtlasQueryError(f"candidates: must be at least top ({top}), got {want}")
     if not (tolerance > 0):
         raise AtlasQueryError(f"tolerance: must be positive, got {tolerance}")
-    variants = describe_variants(family, q[None], atlas.spec.harmonics)[0]
+    variants = describe_variants(family, q[None], atlas.spec.harmonics, template)[0]
     dist, ids = atlas.index.search(variants, variants.shape[0], min(want, atlas.count))
     keep = ids[0] >= 0
     dist, ids = dist[0][keep], ids[0][keep]
     # Ranked coarsely (64 samples) first, then the best few finely: the aligned error's
     # refinement between samples is the query's largest cost.
-    coarse = _aligned(model.space, curves(family, atlas.designs(ids), 64), q, 64).error
+    coarse = _aligned(model.space, curves(family, atlas.designs(ids), 64, template), q, 64).error
     keep = np.argsort(np.where(np.isfinite(coarse), coarse, np.inf), kind="stable")
     keep = np.sort(keep[: max(2 * top, 10)])
     dist, ids = dist[keep], ids[keep]
     designs = atlas.designs(ids)
-    fit = _aligned(model.space, curves(family, designs, RANK_SAMPLES), q)
+    fit = _aligned(model.space, curves(family, designs, RANK_SAMPLES, template), q)
     order = np.argsort(np.where(np.isfinite(fit.error), fit.error, np.inf), kind="stable")[:top]
     size = _size(model.space, q)
     # The chosen curves, densely, carried by their transforms: what each placed linkage traces.
-    dense = curves(family, {n: v[order] for n, v in designs.items()}, DISTANCE_SAMPLES)
+    dense = curves(family, {n: v[order] for n, v in designs.items()}, DISTANCE_SAMPLES, template)
     is_sphere = model.space == "sphere"
     if is_sphere:
         dense = np.einsum("kij,knj->kni", fit.rotation[order], dense)
@@ -249,13 +283,13 @@ def query(
     matches: list[Match] = []
     for rank, k in enumerate(order):
         design = {name: float(v[k]) for name, v in designs.items()}
-        params = _placed_params(family, design, fit, int(k))
-        user, named = _mechanisms(family, params)
+        params = _placed_params(model, design, fit, int(k))
+        placed = _Placed(model, params)
         matches.append(
             Match(
                 atlas_id=int(ids[k]),
-                mechanism=user,
-                named=named,
+                mechanism=placed.user,
+                named=placed.named,
                 error=float(fit.error[k]),
                 distance=_distance(q, dense[rank]),
                 scale=1.0 if is_sphere else float(fit.scale[k]),
@@ -272,26 +306,26 @@ def query(
         fitted = thinned(q, REFINE_POINTS)
         for i, m in enumerate(chosen):
             cost.check_time()
-            better = _refine(family, fitted, m, size, tolerance, budget, q)
+            better = _refine(model, fitted, m, size, tolerance, budget, q)
             if better is not None:
                 matches[i] = better
             if progress:
                 progress(0.2 + 0.8 * (i + 1) / len(chosen))
         matches.sort(key=lambda m: m.distance)
-        matches = _distinct(matches, size)
+        matches = _distinct(matches, size, set(model.linear) | {"x", "y"})
     return matches
 
 
-def _distinct(matches: list[Match], size: float) -> list[Match]:
+def _distinct(matches: list[Match], size: float, scaled: set[str]) -> list[Match]:
     """Matches without repeats: refinements of different entries can converge to one linkage,
-    and a designer choosing among candidates wants each once."""
-    angles = {"frame_angle", "gear_phase", "ratio", "assembly"}
+    and a designer choosing among candidates wants each once. ``scaled``: the parameters in
+    the curve's units (lengths, places)."""
 
     def close(a: Match, b: Match) -> bool:
         # Within 0.1 % of the curve's size (lengths, places) or 1e-3 rad (angles, arcs).
         planar = a.translation is not None
         return a.params.keys() == b.params.keys() and all(
-            abs(a.params[n] - b.params[n]) <= 1e-3 * (size if planar and n not in angles else 1)
+            abs(a.params[n] - b.params[n]) <= 1e-3 * (size if planar and n in scaled else 1)
             for n in a.params
         )
 
@@ -324,7 +358,7 @@ def thinned(points: Array, most: int) -> Array:
 
 
 def _refine(
-    family: str,
+    model: Any,
     q: Array,
     m: Match,
     size: float,
@@ -339,10 +373,9 @@ def _refine(
     after the match's. Whether it is better is judged by the distance to ``everything`` (all
     the query's points; default ``q``)."""
     everything = q if everything is None else everything
-    model = MODELS[family]
     p0 = dict(m.params)
     sphere = model.space == "sphere"
-    names = [n for n in model.shape_names if n != "ratio"]
+    names = [n for n in model.shape_names if n not in getattr(model, "ratios", ("ratio",))]
     names += ["w0", "w1", "w2"] if sphere else ["x", "y", "frame_angle"]
     logs = [n in model.lengths and not sphere for n in names]
     x0 = np.array([np.log(p0[n]) if lg else (0.0 if n[0] == "w" and sphere else p0[n])
@@ -354,7 +387,7 @@ def _refine(
         for i, n in enumerate(names):
             if n in model.lengths:
                 lo[i], hi[i] = 1e-3, np.pi - 1e-3
-            elif n == "point_arc":
+            elif n in getattr(model, "closed_arcs", ("point_arc",)):
                 lo[i], hi[i] = 0.0, np.pi
     x0 = np.clip(x0, lo + 1e-12, hi - 1e-12)
 
@@ -364,30 +397,31 @@ def _refine(
             out[n] = float(np.exp(v)) if lg else float(v)
         return out
 
-    def mechanism(x: Array) -> Mechanism | None:
+    def mechanism(x: Array) -> _Placed | None:
         par = params_of(x)
-        shape = {k: par[k] for k in model.shape_names}
         if sphere:
             pose = R0 @ rodrigues(np.array([par["w0"], par["w1"], par["w2"]]))
         else:
             pose = (par["x"], par["y"], par["frame_angle"])
         try:
-            return model.placed(shape, par["assembly"], pose)[0]
+            return _Placed(model, par, pose)
         except ValueError:
             return None
 
     # Each point's input starts at its nearest sample of the match's curve.
-    theta_grid = np.linspace(0.0, 2.0 * np.pi, DISTANCE_SAMPLES, endpoint=False)
-    dense = _traced(m.mechanism, DISTANCE_SAMPLES)
+    start = mechanism(x0)
+    if start is None:
+        return None
+    theta_grid, dense = start.curve(DISTANCE_SAMPLES)
     near = np.argmin(np.sum((q[:, None, :] - dense[None]) ** 2, axis=-1), axis=1)
     n_par, n_pts = len(names), len(q)
     z0 = np.concatenate([x0, theta_grid[near]])
 
     def residuals(z: Array) -> Array:
-        mech = mechanism(z[:n_par])
-        if mech is None:
+        placed = mechanism(z[:n_par])
+        if placed is None:
             return np.full(n_pts * q.shape[1], 10.0 * size)
-        P = solve(mech, z[n_par:], order=0).positions["P"]
+        P = placed.points(z[n_par:])
         return np.nan_to_num(P - q, nan=10.0 * size).ravel()
 
     sparsity = np.zeros((n_pts * q.shape[1], n_par + n_pts), dtype=bool)
@@ -411,20 +445,17 @@ def _refine(
     user = mechanism(z[:n_par])
     if user is None:
         return None
-    traced = _traced(user, DISTANCE_SAMPLES)
+    traced = user.curve(DISTANCE_SAMPLES)[1]
     if not np.all(np.isfinite(traced)):
         return None  # refined past a limit position: the input no longer turns fully
     distance = _distance(everything, traced)
     if not distance < m.distance:
         return None
-    again = _aligned(model.space, _traced(user, RANK_SAMPLES)[None], everything)
-    named = model.placed(
-        {k: params_of(z[:n_par])[k] for k in model.shape_names}, p0["assembly"],
-        (0.0, 0.0, 0.0) if not sphere else np.eye(3),
-    )[1]  # fmt: skip
+    again = _aligned(model.space, user.curve(RANK_SAMPLES)[1][None], everything)
+    named = _Placed(model, params_of(z[:n_par]), (0.0, 0.0, 0.0) if not sphere else np.eye(3)).named
     return Match(
         atlas_id=m.atlas_id,
-        mechanism=user,
+        mechanism=user.user,
         named=named,
         error=float(again.error[0]),
         distance=distance,

@@ -594,6 +594,11 @@ def trace(
             period=TWO_PI * float(np.max(input_turns(plan, params, points=points))),
         )
         arcs_of(found, batch_shape(params, points))  # one linkage at a time
+        if not found:
+            # Nothing assembles: a circuit of no valid sample, as for a dyad that never closes.
+            theta = np.linspace(-np.pi, np.pi, samples, endpoint=False)
+            motion = evaluate(plan, params, theta, points=points, order=order)
+            return _restrict(motion, np.zeros(motion.valid.shape, dtype=bool))
         if not 0 <= circuit < len(found):
             raise ValueError(
                 f"circuit: {circuit} is not one of the linkage's {len(found)} circuits"

@@ -43,9 +43,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine.plan import ASSEMBLY_TOL
+from linkwright.engine.state import ASSEMBLY_TOL
 from linkwright.engine.triad import sweep_roots
 from linkwright.geometry import sphere
+
+# A circle's frame and a point on it are sphere geometry; named here too, where the triad's
+# data are described in their terms.
+circle_frame = sphere.circle_frame
+on_circle = sphere.on_circle
 
 __all__ = [
     "MAX_POSES",
@@ -127,52 +132,6 @@ class SphereTriadPoses:
     def valid(self) -> NDArray[np.bool_]:
         """``(..., 8)``: which slots hold a real pose."""
         return np.arange(self.theta_b.shape[-1]) < self.count[..., None]
-
-
-def circle_frame(axis: ArrayLike, ref: ArrayLike, sense: ArrayLike = 1.0) -> Array:
-    """The frame (O, e1, e2) of a small circle about ``axis``, angles measured from ``ref``.
-
-    ``e1`` is the unit tangent at O towards ``ref`` (only its part normal to O counts) and
-    ``e2 = sense · (O × e1)``: ``sense = 1`` measures angles right-handed about +O, ``-1``
-    left-handed (paper 001 measures θ1 = ∠BAD and θ4 = ∠CDG that way round).
-
-    Returns ``(..., 3, 3)``, the rows O, e1, e2; NaN where ``ref`` is ±O.
-
-    Examples
-    --------
-    Paper 001's input circle: A = (0, 0, 1), θ1 from the great circle A→D, and eq. 5's
-    B = (sin a2 sin θ1, sin a2 cos θ1, cos a2), which turns from +y towards +x:
-
-    >>> a1 = np.radians(60.0)
-    >>> circle_frame([0.0, 0.0, 1.0], [0.0, np.sin(a1), np.cos(a1)], -1.0).round(12) + 0.0
-    array([[0., 0., 1.],
-           [0., 1., 0.],
-           [1., 0., 0.]])
-    """
-    o = np.asarray(axis, dtype=float)
-    e1 = sphere.tangent(o, np.asarray(ref, dtype=float))
-    e2 = np.asarray(sense, dtype=float)[..., None] * sphere.cross(o, e1)
-    return np.stack(np.broadcast_arrays(o, e1, e2), axis=-2)
-
-
-def on_circle(frame: ArrayLike, arc: ArrayLike, theta: ArrayLike) -> Array:
-    """The point at angle ``theta`` on the small circle of ``arc`` in ``frame`` (rows O, e1, e2).
-
-    ``cos arc · O + sin arc (cos θ e1 + sin θ e2)``, batched over the leading axes of all three.
-
-    Examples
-    --------
-    >>> frame = circle_frame([0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
-    >>> on_circle(frame, np.pi / 2, np.pi / 2).round(12) + 0.0
-    array([0., 1., 0.])
-    """
-    frame = np.asarray(frame, dtype=float)
-    arc, theta = np.asarray(arc, dtype=float), np.asarray(theta, dtype=float)
-    c, s = np.cos(theta)[..., None], np.sin(theta)[..., None]
-    radius = np.sin(arc)[..., None]
-    return np.cos(arc)[..., None] * frame[..., 0, :] + radius * (
-        c * frame[..., 1, :] + s * frame[..., 2, :]
-    )
 
 
 def _read(
@@ -567,29 +526,6 @@ def _reshape(poses: SphereTriadPoses, batch: tuple[int, ...]) -> SphereTriadPose
     )
 
 
-def _dyad(p1: Array, r1: Array, p2: Array, r2: Array, sign: Array) -> Array:
-    """The point at arc ``r1`` from ``p1`` and ``r2`` from ``p2`` with sign((p1 × p2)·X) = sign.
-
-    The spherical triangle P1 P2 X: its angle φ at P1 has sin φ · sin r1 sin d = ±√G and
-    cos φ · sin r1 sin d = cos r2 − cos r1 cos d (G the Gram determinant, d = arc P1P2). NaN
-    where the circles do not meet (beyond the engine's assembly tolerance) or P1 = ±P2.
-    """
-    w = sphere.cross(p1, p2)
-    sin_d = sphere.norm(w)
-    cos_d = sphere.dot(p1, p2)
-    g = sphere.gram(np.arctan2(sin_d, cos_d), r1, r2)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        margin = g / (sin_d * np.sin(r1)) ** 2
-        t = (p2 - cos_d[..., None] * p1) / sin_d[..., None]
-        n = w / sin_d[..., None]
-    phi = np.arctan2(sign * np.sqrt(np.clip(g, 0.0, None)), np.cos(r2) - np.cos(r1) * cos_d)
-    x = np.cos(r1)[..., None] * p1 + np.sin(r1)[..., None] * (
-        np.cos(phi)[..., None] * t + np.sin(phi)[..., None] * n
-    )
-    ok = (margin >= -ASSEMBLY_TOL) & (sin_d > 0)
-    return np.where(ok[..., None], x, np.nan)
-
-
 def sphere_triad_sweep(
     frame_b: ArrayLike,
     arc_b: ArrayLike,
@@ -633,7 +569,9 @@ def sphere_triad_sweep(
 
     def place(theta: Array, branch: Array) -> tuple[Array, Array, Array]:
         b = on_circle(fb, q["arc_b"], theta)
-        c = _dyad(b, q["bc"], axis_c, q["arc_c"], np.broadcast_to(branch, theta.shape))
+        c = sphere.small_circles(
+            b, q["bc"], axis_c, q["arc_c"], np.broadcast_to(branch, theta.shape), tol=ASSEMBLY_TOL
+        ).point
         e = sphere.point_at(c, b, q["ce"], q["turn"])
         return b, c, e
 

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine.plan import ASSEMBLY_TOL
+from linkwright.engine.state import ASSEMBLY_TOL
 from linkwright.geometry import plane
 
 __all__ = [
@@ -41,7 +41,6 @@ __all__ = [
     "SweptRoots",
     "TriadPoses",
     "TriadRates",
-    "circle_intersection",
     "sweep_roots",
     "triad_poses",
     "triad_poses_sweep",
@@ -200,52 +199,6 @@ def _link_residual(joints: Array, anchors: Array, lengths: Array, size: Array) -
     gap = np.abs(plane.norm(joints - anchors) - lengths).max(axis=-1)
     with np.errstate(divide="ignore", invalid="ignore"):
         return gap / size
-
-
-def _circle_xy(
-    p1x: Array, p1y: Array, r1: Array, p2x: Array, p2y: Array, r2: Array, sign: Array
-) -> tuple[Array, Array]:
-    """:func:`circle_intersection` on separate coordinates (the sweep's inner loop)."""
-    dx, dy = p2x - p1x, p2y - p1y
-    d2 = dx * dx + dy * dy
-    # (r1+r2)² − d² and d² − (r1−r2)², each free of cancellation near its own root (as DyadRRR).
-    with np.errstate(divide="ignore", invalid="ignore"):
-        margin = ((r1 + r2) ** 2 - d2) * (d2 - (r1 - r2) ** 2) / (4.0 * d2 * r1 * r1)
-        inv_d = 1.0 / np.sqrt(d2)
-        a = ((r1 - r2) * (r1 + r2) + d2) * (0.5 * inv_d)
-        h = sign * r1 * np.sqrt(np.clip(margin, 0.0, None))
-        ok = (margin >= -ASSEMBLY_TOL) & (d2 > 0)
-        a, h = np.where(ok, a * inv_d, np.nan), np.where(ok, h * inv_d, np.nan)
-        return p1x + a * dx - h * dy, p1y + a * dy + h * dx
-
-
-def circle_intersection(
-    p1: ArrayLike, r1: ArrayLike, p2: ArrayLike, r2: ArrayLike, branch: ArrayLike
-) -> Array:
-    """The point at ``r1`` from ``p1`` and ``r2`` from ``p2`` with the given branch, batched.
-
-    ``branch`` is the engine's dyad sign: the result P has ``sign((p2 − p1) × (P − p1)) =
-    branch``. NaN where the circles do not meet (within the engine's assembly tolerance, so an
-    exact limit position still closes) or the centres coincide.
-
-    Examples
-    --------
-    >>> circle_intersection([0.0, 0.0], 5.0, [8.0, 0.0], 5.0, 1.0)
-    array([4., 3.])
-    >>> circle_intersection([0.0, 0.0], 1.0, [8.0, 0.0], 1.0, 1.0)
-    array([nan, nan])
-    """
-    p1, p2 = np.asarray(p1, dtype=float), np.asarray(p2, dtype=float)
-    x, y = _circle_xy(
-        p1[..., 0],
-        p1[..., 1],
-        np.asarray(r1, dtype=float),
-        p2[..., 0],
-        p2[..., 1],
-        np.asarray(r2, dtype=float),
-        np.asarray(branch, dtype=float),
-    )
-    return np.stack((x, y), axis=-1)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -999,7 +952,11 @@ def _triad_chain(
     r12 = np.hypot(side[..., 1, 0], side[..., 1, 1])[..., None]
     j1x = kx[..., 0, :] + l1 * np.cos(psi)
     j1y = ky[..., 0, :] + l1 * np.sin(psi)
-    j2x, j2y = _circle_xy(j1x, j1y, r12, kx[..., 1, :], ky[..., 1, :], l2, branch)
+    k2 = np.stack((kx[..., 1, :], ky[..., 1, :]), axis=-1)
+    j2 = plane.circle_circle(
+        np.stack((j1x, j1y), axis=-1), r12, k2, l2, branch, tol=ASSEMBLY_TOL
+    ).point
+    j2x, j2y = j2[..., 0], j2[..., 1]
     # The rotation taking the body's side J1J2 onto the world's: cos and sin from dot and cross.
     with np.errstate(divide="ignore", invalid="ignore"):
         ux = side[..., 1, 0, None] / (r12 * r12)

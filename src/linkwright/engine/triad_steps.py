@@ -18,7 +18,8 @@ Stephenson III driven at FG. As a plan step it is one more kind beside the dyads
   (:func:`triad_closure`): it vanishes exactly where two poses merge (a limit position of the
   input), and its sign tells the two merging poses apart, as a dyad's branch sign does.
 - **residual**: :func:`triad_residual`, written from the constraints alone.
-- **explanation**: :meth:`Triad.unassembled`, the sentence the faces print.
+- **explanation**: :meth:`Triad.unassembled` and :meth:`Triad.at_limit`, the sentences the
+  faces print.
 
 Derivatives come from the same constraints differentiated once and twice: one 3×3 solve each
 for the body's motion (:func:`linkwright.engine.triad.triad_rates` in the plane; on the sphere
@@ -31,11 +32,20 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine.plan import SINGULAR_SIN, Context, JointState, Param, _mask_derivatives
 from linkwright.engine.sphere_triad import MAX_POSES as SPHERE_POSES
-from linkwright.engine.sphere_triad import circle_frame, sphere_triad
+from linkwright.engine.sphere_triad import sphere_triad
+from linkwright.engine.state import (
+    SINGULAR_SIN,
+    Context,
+    JointState,
+    Param,
+    Params,
+    Positions,
+    mask_derivatives,
+    param_value,
+)
 from linkwright.engine.triad import MAX_POSES as PLANE_POSES
 from linkwright.engine.triad import triad_poses, triad_rates
 from linkwright.geometry import plane, sphere
@@ -135,9 +145,16 @@ def triad_closure(joints: Array, anchors: Array, lengths: Array, space: str) -> 
 
 
 def triad_residual(
-    joints: Array, anchors: Array, lengths: Array, body: tuple[Array, Array, Array], space: str
+    joints: Array,
+    anchors: Array,
+    lengths: Array,
+    body: tuple[Array, Array, Array],
+    space: str,
+    *,
+    relative: bool = True,
 ) -> Array:
-    """Largest constraint error of a triad pose, relative to its size (plane) or in radians.
+    """Largest constraint error of a triad pose, relative to its size (plane; in its units
+    with ``relative=False``) or in radians.
 
     ``body`` is (side, u, v) in the plane (J2 at ``side`` from J1 along the body's x axis, J3 at
     (u, v) in that frame) and (side, arc, angle) on the sphere (J3 at ``arc`` from J1, turned by
@@ -159,7 +176,8 @@ def triad_residual(
         links = np.abs(plane.norm(joints - anchors) - lengths)
         shape = np.abs(plane.norm(joints[..., 1, :] - joints[..., 0, :]) - side)
         third = plane.frame_error(joints[..., 0, :], joints[..., 1, :], joints[..., 2, :], a, b)
-        return np.maximum(np.max(links, axis=-1), np.maximum(shape, third)) / size
+        worst = np.maximum(np.max(links, axis=-1), np.maximum(shape, third))
+        return worst / size if relative else worst
     links = np.abs(sphere.arc(joints, anchors) - lengths)
     shape = np.abs(sphere.arc(joints[..., 0, :], joints[..., 1, :]) - side)
     third = sphere.frame_error(joints[..., 0, :], joints[..., 1, :], joints[..., 2, :], a, b)
@@ -178,7 +196,7 @@ def _states(
     slot: Array,
 ) -> dict[str, JointState]:
     pos = np.where(valid[..., None, None], pos, np.nan)
-    vel, acc = _mask_derivatives(vel, acc, regular[..., None])
+    vel, acc = mask_derivatives(vel, acc, regular[..., None])
     return {
         name: JointState(
             pos[..., k, :],
@@ -231,13 +249,54 @@ class _TriadStep:
     def body(self) -> tuple[Param, Param, Param]:
         raise NotImplementedError
 
-    def unassembled(self) -> str:
+    @property
+    def title(self) -> str:
+        return f"triad {''.join(self.joints)}"
+
+    @staticmethod
+    def _read(positions: Positions, names: tuple[str, ...]) -> Array:
+        """The positions of ``names`` stacked ``(..., 3, d)``."""
+        return np.stack(np.broadcast_arrays(*(positions[n] for n in names)), axis=-2)
+
+    def _lengths(self, params: Params, shape: tuple[int, ...]) -> Array:
+        values = [np.broadcast_to(param_value(p, params), shape) for p in self.lengths]
+        return np.stack(values, axis=-1)
+
+    def closure(self, positions: Positions, params: Params) -> Array:
+        """The relative determinant of the constraints at the placed pose
+        (:func:`triad_closure`): 0 where two poses merge, its sign tells them apart. Whether
+        the triad assembles at all is its pose count (0 where it has no real pose)."""
+        joints = self._read(positions, self.joints)
+        anchors = self._read(positions, self.anchors)
+        lengths = self._lengths(params, joints.shape[:-2])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return triad_closure(joints, anchors, lengths, self.space)
+
+    def residual(self, positions: Positions, params: Params, theta: ArrayLike) -> Array:
+        """The largest error of the three links and of the ternary link's shape
+        (:func:`triad_residual`, in the plane's units, radians and chords on the sphere)."""
+        joints = self._read(positions, self.joints)
+        anchors = self._read(positions, self.anchors)
+        shape = joints.shape[:-2]
+        lengths = self._lengths(params, shape)
+        body = tuple(np.broadcast_to(param_value(p, params), shape) for p in self.body)
+        return triad_residual(joints, anchors, lengths, body, self.space, relative=False)
+
+    def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
         """Why the step cannot place its joints at an input where it has no pose."""
         j, k = self.joints, self.anchors
         return (
             f"the ternary link {''.join(j)} cannot be held by its three links "
-            f"{k[0]}{j[0]}, {k[1]}{j[1]} and {k[2]}{j[2]} at this input: the triad has no "
-            "real pose"
+            f"{k[0]}{j[0]}, {k[1]}{j[1]} and {k[2]}{j[2]}: the triad has no real pose"
+        )
+
+    def at_limit(self) -> str:
+        """What happens at a limit position of the input."""
+        j = "".join(self.joints)
+        held = ", ".join(f"{a}{b}" for a, b in zip(self.anchors, self.joints, strict=True))
+        return (
+            f"triad {j}: two poses merge (the ternary link {j}, held by {held}, cannot go on "
+            "this way in either)"
         )
 
     def _poses(
@@ -418,8 +477,8 @@ class SphereTriad(_TriadStep):
         safe = np.where(
             np.isfinite(anchors).all(axis=(-1, -2))[..., None, None], anchors, np.eye(3)
         )
-        frame_c = circle_frame(safe[..., 0, :], _reference(safe[..., 0, :], safe[..., 1, :]))
-        frame_b = circle_frame(
+        frame_c = sphere.circle_frame(safe[..., 0, :], _reference(safe[..., 0, :], safe[..., 1, :]))
+        frame_b = sphere.circle_frame(
             safe[..., 1, :], _reference(safe[..., 1, :], safe[..., 0, :]), self.sense
         )
 

@@ -11,13 +11,20 @@ they turn counter-clockwise.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from linkwright.geometry.plane import MEET_TOL
+
 __all__ = [
     "ProjectionError",
+    "SphereMeet",
     "angle_at",
     "arc",
+    "circle_frame",
+    "circle_point",
     "clear_centre",
     "cross",
     "dot",
@@ -26,8 +33,10 @@ __all__ = [
     "lambert_azimuthal",
     "map_frame",
     "norm",
+    "on_circle",
     "point_at",
     "rotate",
+    "small_circles",
     "solve_3x3_rows",
     "tangent",
     "unit",
@@ -123,11 +132,135 @@ def point_at(origin: Array, toward: Array, length: ArrayLike, angle: ArrayLike) 
     >>> point_at(a, b, np.pi / 2, np.pi / 2).round(12)
     array([0., 0., 1.])
     """
-    length = np.asarray(length, dtype=float)[..., None]
-    angle = np.asarray(angle, dtype=float)[..., None]
     t = tangent(origin, toward)
-    n = cross(origin, t)
-    return np.cos(length) * origin + np.sin(length) * (np.cos(angle) * t + np.sin(angle) * n)
+    return circle_point(origin, t, cross(origin, t), length, angle)
+
+
+def circle_point(o: Array, e1: Array, e2: Array, arc_: ArrayLike, theta: ArrayLike) -> Array:
+    """``cos arc · o + sin arc (cos θ e1 + sin θ e2)``: the point at angle θ on the small circle
+    of ``arc_`` about ``o``, angles from ``e1`` towards ``e2`` (the rows of
+    :func:`circle_frame`, given apart where a batch should not pay for stacking them).
+
+    The one formula for a point on a small circle: :func:`on_circle`, :func:`point_at`,
+    :func:`small_circles` and the spherical crank use it.
+
+    >>> x, y, z = np.eye(3)
+    >>> circle_point(z, x, y, np.pi / 2, np.pi / 2).round(12) + 0.0
+    array([0., 1., 0.])
+    """
+    arc_ = np.asarray(arc_, dtype=float)[..., None]
+    theta = np.asarray(theta, dtype=float)[..., None]
+    return np.cos(arc_) * o + np.sin(arc_) * (np.cos(theta) * e1 + np.sin(theta) * e2)
+
+
+def circle_frame(axis: ArrayLike, ref: ArrayLike, sense: ArrayLike = 1.0) -> Array:
+    """The frame (O, e1, e2) of a small circle about ``axis``, angles measured from ``ref``.
+
+    ``e1`` is the unit tangent at O towards ``ref`` (only its part normal to O counts) and
+    ``e2 = sense · (O × e1)``: ``sense = 1`` measures angles right-handed about +O, ``-1``
+    left-handed (paper 001 measures θ1 = ∠BAD and θ4 = ∠CDG that way round).
+
+    Returns ``(..., 3, 3)``, the rows O, e1, e2; NaN where ``ref`` is ±O.
+
+    Examples
+    --------
+    Paper 001's input circle: A = (0, 0, 1), θ1 from the great circle A→D, and eq. 5's
+    B = (sin a2 sin θ1, sin a2 cos θ1, cos a2), which turns from +y towards +x:
+
+    >>> a1 = np.radians(60.0)
+    >>> circle_frame([0.0, 0.0, 1.0], [0.0, np.sin(a1), np.cos(a1)], -1.0).round(12) + 0.0
+    array([[0., 0., 1.],
+           [0., 1., 0.],
+           [1., 0., 0.]])
+    """
+    o = np.asarray(axis, dtype=float)
+    e1 = tangent(o, np.asarray(ref, dtype=float))
+    e2 = np.asarray(sense, dtype=float)[..., None] * cross(o, e1)
+    return np.stack(np.broadcast_arrays(o, e1, e2), axis=-2)
+
+
+def on_circle(frame: ArrayLike, arc_: ArrayLike, theta: ArrayLike) -> Array:
+    """The point at angle ``theta`` on the small circle of ``arc_`` in ``frame`` (rows O, e1, e2).
+
+    ``cos arc · O + sin arc (cos θ e1 + sin θ e2)``, batched over the leading axes of all three.
+
+    Examples
+    --------
+    >>> frame = circle_frame([0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
+    >>> on_circle(frame, np.pi / 2, np.pi / 2).round(12) + 0.0
+    array([0., 1., 0.])
+    """
+    frame = np.asarray(frame, dtype=float)
+    return circle_point(frame[..., 0, :], frame[..., 1, :], frame[..., 2, :], arc_, theta)
+
+
+class SphereMeet(NamedTuple):
+    """Where two small circles meet, on one branch: as
+    :class:`linkwright.geometry.plane.Meet`, and the normal ``p1 × p2`` whose sign against the
+    point is the branch."""
+
+    point: Array
+    margin: Array
+    valid: NDArray[np.bool_]
+    normal: Array
+
+
+def small_circles(
+    p1: ArrayLike,
+    r1: ArrayLike,
+    p2: ArrayLike,
+    r2: ArrayLike,
+    branch: ArrayLike,
+    *,
+    tol: float = MEET_TOL,
+) -> SphereMeet:
+    """The point at arc ``r1`` from ``p1`` and arc ``r2`` from ``p2`` on ``branch``, batched.
+
+    ``branch`` is the engine's dyad sign on the sphere (DESIGN.md): the point X has
+    ``sign((p1 × p2)·X) = branch``. With d the arc p1p2 and φ the angle at p1 between the great
+    circles p1→p2 and p1→X (spherical triangle p1 p2 X with sides d, r1, r2)::
+
+        sin φ · sin r1 sin d = ±√G,   cos φ · sin r1 sin d = cos r2 − cos r1 cos d,
+
+    G the Gram determinant (:func:`gram`, in product form, so a tangency keeps its digits). The
+    margin is ``sin² φ = G / (sin² d sin² r1)``, 0 where the circles touch, as in the plane
+    (:func:`linkwright.geometry.plane.circle_circle`).
+
+    The frame at p1 (t towards p2, n = p1 × t) is built from the vectors, not from sin d:
+    (p1 × p2) × p1 is p2's part normal to p1 and stays normal to p1 to rounding even when it
+    is itself only rounding (p2 − cos d·p1 would not), so X is a unit vector however close p1
+    and p2 come. Where they are parallel to rounding, t is arbitrary but still a unit normal
+    to p1, and the circles can only meet there if r1 ≈ r2 (X may then sit anywhere on its
+    circle): X still meets both arcs.
+
+    Examples
+    --------
+    Two circles of 60° about the x and y axes meet above and below the xy plane:
+
+    >>> x, y = np.eye(3)[:2]
+    >>> up = small_circles(x, np.pi / 3, y, np.pi / 3, 1.0)
+    >>> (up.point * 2).round(12) + 0.0, bool(up.valid)
+    (array([1.      , 1.      , 1.414214]), True)
+    >>> bool(small_circles(x, 0.1, y, 0.1, 1.0).valid)  # 90° apart, 0.2 rad cannot reach
+    False
+    """
+    p1, p2 = np.asarray(p1, dtype=float), np.asarray(p2, dtype=float)
+    r1, r2 = np.asarray(r1, dtype=float), np.asarray(r2, dtype=float)
+    w = cross(p1, p2)
+    sin_d = norm(w)
+    cos_d = dot(p1, p2)
+    g = gram(np.arctan2(sin_d, cos_d), r1, r2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        margin = g / (sin_d * np.sin(r1)) ** 2
+        valid = (margin >= -tol) & (sin_d > 0)
+    t = unit(cross(w, p1))
+    # NaN where the circles miss, so the point is NaN there.
+    phi = np.arctan2(
+        np.asarray(branch, dtype=float) * np.sqrt(np.where(valid, np.clip(g, 0.0, None), np.nan)),
+        np.cos(r2) - np.cos(r1) * cos_d,
+    )
+    point = circle_point(p1, t, cross(p1, t), r1, phi)
+    return SphereMeet(point, margin, valid, w)
 
 
 def angle_at(at: Array, a: Array, b: Array) -> Array:

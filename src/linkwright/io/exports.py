@@ -76,7 +76,7 @@ from linkwright.engine import (
 from linkwright.engine.plan import placed_joints
 from linkwright.files import atomic_path
 from linkwright.geometry.sphere import lambert_azimuthal, map_frame
-from linkwright.mechanisms import Mechanism, circuit, solve
+from linkwright.mechanisms import Mechanism, circuit, circuits, solve
 
 __all__ = [
     "FORMATS",
@@ -361,10 +361,15 @@ def _circuit_paths(mechanism: Mechanism, samples: object) -> _Paths:
             f"(shape {mechanism.batch_shape}): export one at a time"
         )
     try:
-        motion = circuit(mechanism, n, order=0)
+        if mechanism.plan.triads:
+            # A triad's circuits are found together, none where it never assembles.
+            found = circuits(mechanism, n, order=0)[1]
+            motion = found[0] if found else None
+        else:
+            motion = circuit(mechanism, n, order=0)
     except ValueError as exc:  # e.g. a gear ratio that never repeats: no closed circuit
         raise ExportError(f"cannot trace the circuit: {exc}") from None
-    valid = np.asarray(motion.valid, dtype=bool)
+    valid = np.asarray(motion.valid, dtype=bool) if motion is not None else np.zeros(1, bool)
     if not valid.any():
         raise ExportError("the linkage cannot be assembled at any input (with its assembly)")
     return _Paths(

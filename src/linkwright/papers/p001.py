@@ -15,6 +15,9 @@ numeric example. linkwright's reading (SEED-NOTES.md):
   mechanism chosen by a search for one with eight real configurations at some θ6 (it has them
   at 66 of the 360 whole degrees of θ6; at :data:`EXAMPLE_INPUT` = 280° they are farthest
   apart).
+- :mod:`linkwright.papers.p001_circuits` follows issue 21's example driven at FG (the bundled
+  ``paper001-fg``: 8, 4 and 6 configurations at θ6 = −90°, 0°, 120°) over its input: its closed
+  circuits, and which configurations join at which limit positions.
 - :func:`misprints` checks each misprint of SEED-NOTES.md numerically (and that eqs. 19 and 21
   are right).
 
@@ -34,6 +37,7 @@ from numpy.typing import NDArray
 from linkwright.engine.sphere_triad import bilinear_resultant, circle_frame
 from linkwright.geometry import sphere
 from linkwright.mechanisms import SphericalStephenson3, solve, solve_all
+from linkwright.papers import p001_circuits
 from linkwright.papers.p001_angles import paper_angles
 
 __all__ = [
@@ -800,8 +804,10 @@ def reproduce(out: str | Path) -> list[Path]:
 
     Files: ``paper001.md`` (the page), ``paper001-counts.csv`` (configurations and largest
     residual at every degree of each input), ``paper001-configurations.csv`` (the eight at
-    :data:`EXAMPLE_INPUT`), and the figures ``paper001-counts`` and
-    ``paper001-configurations`` as PNG and SVG. Returns the paths written.
+    :data:`EXAMPLE_INPUT`), ``paper001-circuits.csv`` (issue 21's example driven at FG: where
+    its configurations join, :mod:`linkwright.papers.p001_circuits`), and the figures
+    ``paper001-counts``, ``paper001-configurations`` and ``paper001-circuits`` as PNG and SVG.
+    Returns the paths written.
     """
     from linkwright.plot import save_figure
 
@@ -941,10 +947,13 @@ def reproduce(out: str | Path) -> list[Path]:
             f"{_num(r['theta6'])} | {int(r['assembly']):+d} | {int(r['assembly2']):+d} | "
             f"{r['residual']:.1e} |"
         )
+    circuit_lines, circuit_files = p001_circuits.write(out)
+    written += circuit_files
     lines += [
         "",
         "Figure: paper001-configurations.png / .svg; numbers: paper001-configurations.csv.",
         "",
+        *circuit_lines,
         "## Why the paper counts 8 for input AB",
         "",
         "System (4) fixes the coupler by B·C = cos a3, C·E = cos a6 and "

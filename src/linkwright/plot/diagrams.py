@@ -906,9 +906,13 @@ def _trace(mechanism: Mechanism, samples: int) -> list[_Circuit]:
     except NoPeriod as exc:
         raise DiagramError(f"{name}: its circuit never closes, so it has no cycle: {exc}") from None
     if not circuits:
+        why = (
+            "its triad's ternary link cannot be held by its three links"
+            if mechanism.plan.triads
+            else "some dyad's links cannot reach each other"
+        )
         raise DiagramError(
-            f"{name} cannot be assembled at any input angle: some dyad's links cannot reach "
-            "each other, so there is no motion to draw"
+            f"{name} cannot be assembled at any input angle: {why}, so there is no motion to draw"
         )
     return circuits
 
@@ -1115,7 +1119,9 @@ def plot_diagram(
         arcs = ", ".join(
             f"[{_deg(float(np.nanmin(x)))}°, {_deg(float(np.nanmax(x)))}°]" for x in run.x
         )
-        lines.append(f"input rocks over {arcs}: at each limit a dyad changes branch")
+        # A triad has no branch sign: at its limits two of its configurations meet.
+        turn = "two configurations meet" if mechanism.plan.triads else "a dyad changes branch"
+        lines.append(f"input rocks over {arcs}: at each limit {turn}")
         handles = [
             Line2D([], [], color="0.2", ls=UP_STYLE, lw=1.6, label="up (θ increasing)"),
             Line2D([], [], color="0.2", ls=BACK_STYLE, lw=1.6, label="back (θ decreasing)"),

@@ -44,6 +44,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+import textwrap
 from dataclasses import dataclass
 
 import numpy as np
@@ -83,6 +84,7 @@ from linkwright.mechanisms import (
     SphericalSixBar,
     SphericalStephenson3,
     circuit,
+    circuits,
     solve,
 )
 from linkwright.mechanisms.sixbar import SixBar
@@ -191,6 +193,12 @@ def _modes(mechanism: Mechanism, samples: int, *, every: bool = True) -> tuple[_
     base = mechanism.params()
     names = tuple(d.branch for d in plan.dyads)
     own = tuple(1.0 if float(np.asarray(base[n])) > 0 else -1.0 for n in names)
+    if plan.triads:
+        # A triad's configurations are followed, not held: one mode with every circuit of
+        # every configuration. Its arcs count only the rocking circuits, so the circuits are
+        # taken as found, full turns included.
+        arcs, found = circuits(mechanism, samples, order=2)
+        return (_Mode(names, own, True, base, arcs, tuple(found)),)
     combos = [own]
     if every and len(names) <= MAX_MODE_DYADS:
         combos += [s for s in itertools.product((1.0, -1.0), repeat=len(names)) if s != own]
@@ -200,11 +208,11 @@ def _modes(mechanism: Mechanism, samples: int, *, every: bool = True) -> tuple[_
         params.update({n: np.float64(s) for n, s in zip(names, signs, strict=True)})
         arcs = input_arcs(plan, params, points=mechanism.points)
         count = 0 if bool(arcs.never) else 1 if bool(arcs.full) else int(arcs.count)
-        circuits = tuple(
+        traced = tuple(
             trace(plan, params, samples, points=mechanism.points, order=2, circuit=k)
             for k in range(count)
         )
-        out.append(_Mode(names, signs, signs == own, params, arcs, circuits))
+        out.append(_Mode(names, signs, signs == own, params, arcs, traced))
     return tuple(out)
 
 
@@ -509,8 +517,13 @@ def _limit_marks(mechanism: Mechanism, own: _Mode) -> list[_Mark]:
         changed = keys != np.roll(keys, 1, axis=0)
         for i in np.flatnonzero(np.any(changed, axis=-1)):
             theta = float(motion.input[i])
-            which = ", ".join(n for n, c in zip(names, changed[i], strict=True) if c)
-            text = f"limit θ = {_deg(math.degrees(theta))}°" + (f" (dyad {which})" if many else "")
+            # Each step kind names itself ("dyad B", "triad BCE": one name for its joints).
+            steps = (mechanism.plan.step(n) for n, c in zip(names, changed[i], strict=True) if c)
+            which = ", ".join(dict.fromkeys(step.title for step in steps))
+            # A triad's circuit may run on past a whole turn of the input: its limits are
+            # named within one turn, as analyze lists them.
+            shown = math.remainder(theta, 2 * math.pi) if mechanism.plan.triads else theta
+            text = f"limit θ = {_deg(math.degrees(shown))}°" + (f" ({which})" if many else "")
             marks.append(_Mark("limit", theta, _pose_of(motion, int(i)), text))
     return marks
 
@@ -903,10 +916,13 @@ def plot_linkage(
     if placed:
         draw_pose(ax, mechanism, pose, 0)
     else:
+        # The step that fails says why, wrapped to stay inside the axes.
+        why = mechanism.plan.unassembled(mechanism.params(), theta, points=mechanism.points)
         ax.text(
             0.5,
             0.5,
-            f"cannot assemble at θ = {_deg(math.degrees(theta))}°",
+            f"cannot assemble at θ = {_deg(math.degrees(theta))}°"
+            + ("" if why is None else "\n" + textwrap.fill(why, 60)),
             transform=ax.transAxes,
             ha="center",
             va="center",

@@ -154,8 +154,9 @@ def plot_mechanism(
     ...     plot_mechanism(rocking, at=0.0)
     ... except PlotError as exc:
     ...     print(exc)
-    at θ = 0.0° the linkage does not assemble on its own assembly;
-    it does for θ in [−106.1°, −64.1°] and [64.1°, 106.1°]
+    at θ = 0.0° the linkage does not assemble on its own assembly: the coupler and rocker
+    cannot fold that short (dyad B: |A B0| = 0.5 < |coupler - rocker| = 4); it does for
+    θ in [−106.1°, −64.1°] and [64.1°, 106.1°]
 
     A linkage that closes nowhere cannot be drawn:
 
@@ -188,9 +189,11 @@ def plot_mechanism(
             raise PlotError(f"at: must be a finite input angle in radians, got {at!r}")
         at = float(at)
         if not bool(solve(mechanism, [at], order=0).valid[0]):
+            why = mechanism.plan.unassembled(mechanism.params(), at, points=mechanism.points)
             raise PlotError(
                 f"at θ = {_deg(math.degrees(at))}° the linkage does not assemble on its own "
-                f"assembly; it does for {range_text(input_range(mechanism))}"
+                + ("assembly" if why is None else f"assembly: {why}")
+                + f"; it does for {range_text(input_range(mechanism))}"
             )
     samples = int(samples)
     if mechanism.space == "sphere":

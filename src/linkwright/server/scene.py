@@ -27,7 +27,7 @@ import orjson
 
 from linkwright.engine import cost
 from linkwright.engine.circuits import InputArcs, NoPeriod
-from linkwright.engine.plan import DyadRRP, DyadRRR, SphereDyad
+from linkwright.engine.plan import placed_joints
 from linkwright.geometry.sphere import clear_centre, lambert_azimuthal
 from linkwright.io import (
     FAMILY_SPECS,
@@ -40,7 +40,7 @@ from linkwright.io import (
     topology,
 )
 from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS, WORKING_RANGE
-from linkwright.mechanisms import Mechanism, registry, solve
+from linkwright.mechanisms import Mechanism, circuits, registry, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.plot.diagrams import DiagramError, diagram_series
 from linkwright.plot.view import range_text
@@ -331,31 +331,27 @@ def _dyads(mechanism: Mechanism) -> dict[str, Any]:
         plan = mechanism.plan
     except NoConstructionPlan:
         return {}
-    return {s.name: s for s in plan.steps if isinstance(s, DyadRRR | DyadRRP | SphereDyad)}
+    # Every joint of a step that has limit positions (a dyad, a triad), so that any of a
+    # triad's joints names it; the step kind says what happens there.
+    return {j: s for s in plan.steps if hasattr(s, "at_limit") for j in placed_joints(s)}
 
 
 def _limit_text(theta_deg: float, changed: list[str], dyads: dict[str, Any], sphere: bool) -> str:
     """Why the input turns back at a limit position, in words."""
-    reasons = []
-    for name in changed:
-        step = dyads.get(name)
-        if isinstance(step, DyadRRP):
-            reasons.append(
-                f"the rod {step.p1}–{name} stands square to its guide, so the pin {name} is at "
-                "the end of its reach"
-            )
-        elif step is not None:
-            line = "on one great circle" if sphere else "in line"
-            reasons.append(
-                f"the links {step.p1}–{name} and {step.p2}–{name} of the dyad at {name} fall "
-                f"{line} (stretched out or folded)"
-            )
+    steps = list({id(s): s for s in (dyads.get(name) for name in changed) if s}.values())
+    triad = any(hasattr(s, "max_poses") for s in steps)
+    reasons = [s.at_limit() for s in steps]
     why = "; ".join(reasons) if reasons else "a dyad reaches the end of its reach"
-    flipped = ", ".join(changed) if changed else "a dyad"
+    if triad:
+        # A triad's circuit may run on past a whole turn: the limit is named within one turn.
+        theta_deg = math.degrees(math.remainder(math.radians(theta_deg), 2 * math.pi))
+        then = "in the other configuration"
+    else:
+        then = f"with {', '.join(changed) if changed else 'a dyad'} on its other branch (the "
+        then += "other assembly)"
     return (
         f"Limit position at θ = {theta_deg:.2f}°: the input cannot turn further this way, "
-        f"because {why}. The machine runs on with {flipped} on its other branch (the other "
-        "assembly) as the input turns back."
+        f"because {why}. The machine runs on {then} as the input turns back."
     )
 
 
@@ -365,7 +361,9 @@ def _circuit_json(
     theta = _degrees(motion.input)
     limits: list[tuple[int, float, str]] = []
     if not full:
-        step = np.sign(np.diff(np.r_[theta, theta[0]]))
+        # The step back to the start is taken within one turn: a triad's circuit may close a
+        # whole turn away from where it started.
+        step = np.sign((np.diff(np.r_[theta, theta[0]]) + 180.0) % 360.0 - 180.0)
         n = theta.size
         for i in range(n):
             if step[i] != 0 and step[i - 1] != 0 and step[i] != step[i - 1]:
@@ -559,7 +557,12 @@ def _scene(document: Any, *, samples: int, at: float | None, diagrams: bool) -> 
     try:
         planned = _planned(doc, samples, diagrams)
         for label, signs, variant, own, arcs in planned:
-            motions = budget.trace_circuits(variant.mechanism, arcs, samples)
+            if variant.mechanism.plan.triads:
+                # Every circuit of every configuration, found together: the arcs count only
+                # the rocking ones, and a circuit that turns fully may run beside them.
+                motions = circuits(variant.mechanism, samples, order=0)[1]
+            else:
+                motions = budget.trace_circuits(variant.mechanism, arcs, samples)
             if motions:
                 traced_variants.append((label, signs, own, arcs, motions))
             else:
@@ -597,9 +600,13 @@ def _scene(document: Any, *, samples: int, at: float | None, diagrams: bool) -> 
         )
     own_mode = next((m for m in modes if m["own"]), None)
     if message is None and not modes:
+        why = (
+            "its triad’s ternary link cannot be held by its three links"
+            if mech.plan.triads
+            else "some dyad’s links cannot reach each other"
+        )
         message = (
-            "This linkage cannot be assembled at any input angle, in any assembly mode: some "
-            "dyad’s links cannot reach each other."
+            f"This linkage cannot be assembled at any input angle, in any assembly mode: {why}."
         )
     elif message is None and own_mode is None:
         message = (
@@ -864,7 +871,10 @@ def _gauss_newton(
             if q is None:
                 return trial, t, float(np.linalg.norm(r))
             J[:, j] = (q - p) / h
-        dx, *_ = np.linalg.lstsq(J, -r, rcond=None)
+        # Directions the fields cannot move the joint (off the sphere; along a triad's joint's
+        # circle when every field turns it the same way) show in the forward differences as
+        # singular values at their noise: solving along them would take wild steps.
+        dx, *_ = np.linalg.lstsq(J, -r, rcond=1e-6)
         moved = False
         for damping in (1.0, 0.5, 0.25, 0.125, 0.0625):
             cand = x + damping * dx

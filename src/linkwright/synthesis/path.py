@@ -72,9 +72,9 @@ from scipy.optimize import least_squares, minimize_scalar
 from linkwright.analysis.general import dyad_transmission_angles
 from linkwright.analysis.planar import fourbar_class, slidercrank_class, transmission_extremes
 from linkwright.engine.circuits import MAX_TURNS
+from linkwright.mechanisms import FAMILIES as REGISTERED
 from linkwright.mechanisms import Mechanism, circuit, input_range, solve
 from linkwright.synthesis.path_families import (
-    MODELS,
     TWO_PI,
     Model,
     path_margin,
@@ -83,6 +83,9 @@ from linkwright.synthesis.path_families import (
     sphere_rotation,
     to_user,
 )
+from linkwright.synthesis.path_models import GenericModel, ModelError, model_for
+from linkwright.synthesis.path_verify import in_one_arc as _in_one_arc
+from linkwright.synthesis.path_verify import verify_generic
 
 __all__ = [
     "FAMILIES",
@@ -96,8 +99,10 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-FAMILIES = tuple(MODELS)
-"""The families :func:`fit_path` synthesises."""
+FAMILIES = tuple(REGISTERED)
+"""The families :func:`fit_path` synthesises: every registered family, the four of
+:data:`~linkwright.synthesis.path_families.MODELS` by their hand-written models, the others by
+:class:`~linkwright.synthesis.path_models.GenericModel`."""
 TIMINGS = ("prescribed", "free", "none")
 """The timings :func:`fit_path` knows (see the module docstring)."""
 
@@ -302,11 +307,11 @@ def _checked_bound(model: Model, name: str, lo: float, hi: float, size: float):
         if hi <= 0:
             raise PathSynthesisError(f"bounds[{name!r}]: a length must be positive, got {hi}")
         return (max(lo, 1e-6 * size), hi)
-    if name == "point_arc" and (lo < 0 or hi > np.pi):
-        raise PathSynthesisError(f"bounds['point_arc']: must lie in [0, π], got ({lo}, {hi})")
-    if name == "ratio" and lo <= 0 <= hi:
+    if name in getattr(model, "closed_arcs", ("point_arc",)) and (lo < 0 or hi > np.pi):
+        raise PathSynthesisError(f"bounds[{name!r}]: must lie in [0, π], got ({lo}, {hi})")
+    if name in getattr(model, "ratios", ("ratio",)) and lo <= 0 <= hi:
         raise PathSynthesisError(
-            f"bounds['ratio']: the gear ratio must not be 0, so its bounds cannot contain 0, "
+            f"bounds[{name!r}]: the gear ratio must not be 0, so its bounds cannot contain 0, "
             f"got ({lo}, {hi})"
         )
     return (lo, hi)
@@ -338,6 +343,11 @@ def _constraints(model: Model, given: PathConstraints | Mapping[str, Any] | None
     if not (math.isfinite(mu) and 0.0 <= mu < np.pi / 2):
         raise PathSynthesisError(
             f"constraints.min_transmission: must lie in [0, π/2) radians, got {mu}"
+        )
+    if mu > 0 and isinstance(model, GenericModel) and not model.plan.dyads:
+        raise PathSynthesisError(
+            f"constraints.min_transmission: the {model.family} as given has no dyad, so no "
+            "transmission angle to bound"
         )
     return given
 
@@ -399,14 +409,35 @@ class _Problem:
         self.turns = 1
         if model.family == "geared-fivebar":
             self.turns = _gear_turns(bounds["ratio"])
+        elif isinstance(model, GenericModel):
+            for name in model.ratios:
+                if bounds[name][0] != bounds[name][1]:
+                    raise PathSynthesisError(
+                        f"bounds[{name!r}]: a gear ratio is chosen, not fitted: give equal "
+                        f"bounds, got {bounds[name]}"
+                    )
+            self.turns = model.turns
         self.period = TWO_PI * self.turns
         self.grid = np.arange(GRID) * (self.period / GRID)
         self.cover_grid = np.arange(COVERAGE) * (self.period / COVERAGE)
-        self.sampled = model.family == "geared-fivebar" and (self.full_turn or self.mu > 0)
+        self.sampled = (model.family == "geared-fivebar" or isinstance(model, GenericModel)) and (
+            self.full_turn or self.mu > 0
+        )
         nn = np.sqrt(np.sum((targets[:, None] - targets[None]) ** 2, axis=-1))
         np.fill_diagonal(nn, np.inf)
         self.coverage_h = 0.6 * float(np.max(np.min(nn, axis=1)))
         self.penalty = 10.0 * size if model.space == "plane" else 2.0 + 10.0 * size
+        # A family whose evaluation costs more (a triad solves every pose) searches with
+        # proportionally fewer members and starts.
+        scale = getattr(model, "search_scale", 1.0)
+        self.screen = SCREEN if scale == 1.0 else max(2, int(SCREEN * scale))
+        self.starts = STARTS if scale == 1.0 else max(3, int(STARTS * scale))
+        self.extra = EXTRA if scale == 1.0 else max(2, int(EXTRA * scale))
+        self.seeds: Array | None = None
+        # A configuration with a triad is named by its pose at this input (from the frame line):
+        # the first target's where the timing is prescribed, so that a branch that rocks
+        # between limit positions away from the input 0 can be chosen too.
+        self.anchor = float(angles[0]) if angles is not None else 0.0
 
     # -- decoding -----------------------------------------------------------------------
 
@@ -415,6 +446,8 @@ class _Problem:
         full = np.broadcast_to((self.lo + self.hi) / 2, (len(genes), len(self.names))).copy()
         full[:, self.free] = genes[:, :-1]
         full[:, ~self.free] = self.lo[~self.free]
+        if isinstance(self.model, GenericModel):
+            return full, self.model.code(genes[:, -1])
         return full, np.where(genes[:, -1] >= 0, 1.0, -1.0)
 
     def split(self, full: Array) -> tuple[Array, dict[str, Array]]:
@@ -430,6 +463,10 @@ class _Problem:
     def trace(self, pose: Array, shape: dict[str, Array], assembly: Array, rel: Array):
         """Traced points in the user's frame at the inputs ``rel`` (K,) or (B, K), the valid
         mask, and the local motion (for margins and the dyad's joints)."""
+        if isinstance(self.model, GenericModel):
+            local, valid, motion = self.model.evaluate(shape, assembly, rel, self.anchor)
+            self.evaluations += len(assembly)
+            return to_user(self.model.space, local, pose), valid, motion
         mech = self.model.local(shape, assembly)
         motion = solve(mech, rel, order=0)
         self.evaluations += len(assembly)
@@ -437,7 +474,7 @@ class _Problem:
         return P, motion.valid, motion
 
     def gaps(
-        self, shape: dict[str, Array], motion=None, sl=None, hull=None
+        self, shape: dict[str, Array], motion=None, sl=None, hull=None, code=None
     ) -> list[tuple[Array, float]]:
         """Every constraint function g (≤ 0 when met, normalised) with the margin by which
         the search keeps inside it. ``hull`` = (lo, hi): the inputs the path sweeps, which
@@ -447,11 +484,14 @@ class _Problem:
             (g, MARGIN)
             for g in self.model.closed_form_gaps(shape, c.classes, self.full_turn, self.mu)
         ]
-        if hull is not None:
+        if hull is not None and isinstance(self.model, Model):
             m = path_margin(self.model, shape, *hull)
             if m is not None:
                 out.append((-m, MARGIN))
-        if self.sampled and motion is not None:
+        if self.sampled and motion is not None and isinstance(self.model, GenericModel):
+            found = self.model.sampled_gaps(motion, sl, self.full_turn, self.mu, shape, code)
+            out += [(g, SAMPLED_MARGIN) for g in found]
+        elif self.sampled and motion is not None:
             pos = {k: motion.positions[k][:, sl] for k in ("A", "B", "C")}
             mar = {"C": motion.margins["C"][:, sl]}
             out += [(g, SAMPLED_MARGIN) for g in sampled_gaps(pos, mar, self.full_turn, self.mu)]
@@ -489,7 +529,7 @@ class _Problem:
             viol += ~np.isfinite(err)
             sl = slice(None)
             hull = None
-        for g, margin in self.gaps(shape, motion, sl, hull):
+        for g, margin in self.gaps(shape, motion, sl, hull, assembly):
             viol += np.maximum(g + margin, 0.0)
         err = np.where(np.isfinite(err), err, np.inf)
         return err, viol
@@ -667,7 +707,12 @@ class _Evolution:
         self.wrap = np.r_[p.periodic[p.free], False]
         # The first generation is the best of SCREEN times as many random members: one
         # batched evaluation that starts the evolution among the better basins.
-        X = rng.uniform(self.lo, self.hi, (SCREEN * size, len(self.lo)))
+        X = rng.uniform(self.lo, self.hi, (p.screen * size, len(self.lo)))
+        if p.seeds is not None:
+            # Starts from the template the user gave (its own linkage, laid over the targets)
+            # take the first places; they are screened like the rest.
+            X[: len(p.seeds)] = np.clip(p.seeds[: len(X)], self.lo, self.hi)
+            p.seeds = None
         err, viol = p.fitness(X)
         keep = np.lexsort((err, viol))[:size]
         self.X, self.err, self.viol = X[keep], err[keep], viol[keep]
@@ -757,7 +802,7 @@ class _Local:
                 lo.append(-np.inf if p.periodic[i] else p.lo[i])
                 hi.append(np.inf if p.periodic[i] else p.hi[i])
                 typ.append(1.0 if i == 2 else p.size)
-        linear = (*m.lengths, "u", "v", "offset") if m.space == "plane" else ()
+        linear = m.linear
         for k in self.shape_free:
             i = 3 + m.shape_names.index(k)
             columns.append(np.array([c.shape[k] for c in starts]))
@@ -855,7 +900,8 @@ class _Local:
             at += COVERAGE
         sl = slice(at, at + GRID) if p.sampled else None
         feasible = valid[:, : n + nm].all(axis=1)
-        for g, margin in p.gaps(shape, motion, sl, (rel.min(axis=1), rel.max(axis=1))):
+        hull = (rel.min(axis=1), rel.max(axis=1))
+        for g, margin in p.gaps(shape, motion, sl, hull, self.assembly[owner]):
             res.append((WEIGHT * p.size * np.maximum(g + margin, 0.0))[:, None])
             feasible &= g <= 0.0
         return np.concatenate(res, axis=1), valid, err, feasible
@@ -1029,6 +1075,8 @@ class _Local:
 
 
 def _verify(p: _Problem, cand: _Candidate) -> tuple[dict[str, Any] | None, str]:
+    if isinstance(p.model, GenericModel):
+        return verify_generic(p, cand)
     m = p.model
     mech, named, R = m.placed(cand.shape, cand.assembly, cand.pose)
     psi = 0.0 if m.space == "sphere" else float(cand.pose[2])
@@ -1087,17 +1135,6 @@ def _verify(p: _Problem, cand: _Candidate) -> tuple[dict[str, Any] | None, str]:
     ), ""
 
 
-def _in_one_arc(vmin: float, vmax: float, lo: Array, hi: Array, period: float) -> bool:
-    tol = 1e-9
-    for a, b in zip(lo, hi, strict=True):
-        if not np.isfinite(a):
-            continue
-        k = math.floor((vmin - a + tol) / period)
-        if vmax - k * period <= b + tol and vmin - k * period >= a - tol:
-            return True
-    return False
-
-
 def _reproject(p: _Problem, mech: Mechanism, psi: float, rel: Array) -> Array:
     """Move each target's input to its nearest point on the whole curve (a full turn)."""
     dense = np.linspace(0.0, p.period, 2048, endpoint=False)
@@ -1127,6 +1164,20 @@ def _reproject(p: _Problem, mech: Mechanism, psi: float, rel: Array) -> Array:
     return out
 
 
+def _seed_genes(p: _Problem, seeds: list[tuple[Array, dict[str, float], float]]) -> Array | None:
+    """Genes of the members that start from the template (pose, shape and configuration), with
+    the free parameters in the search's order and the configuration's gene in its share."""
+    if not seeds:
+        return None
+    rows = []
+    k = len(getattr(p.model, "combos", (0,)))
+    for pose, shape, code in seeds:
+        full = dict(zip(p.model.pose_names, np.asarray(pose, float), strict=True), **shape)
+        values = np.array([full[n] for n in p.names])
+        rows.append(np.r_[values[p.free], (2.0 * code + 1.0) / k - 1.0])
+    return np.array(rows)
+
+
 # ------------------------------------------------------------------------------------------
 # The public verb
 # ------------------------------------------------------------------------------------------
@@ -1147,6 +1198,7 @@ def fit_path(
     max_evaluations: int | None = None,
     population: int | None = None,
     progress: Callable[[float], None] | None = None,
+    template: Mechanism | None = None,
 ) -> PathFit:
     """Fit a linkage's traced point to target points (see the module docstring for the method).
 
@@ -1226,11 +1278,14 @@ needed, got 2
 assembling at every target was found ...
     """
     t0 = time.perf_counter()
-    if family not in MODELS:
+    if family not in FAMILIES:
         raise PathSynthesisError(
             f"family: unknown {family!r}; path synthesis knows {', '.join(FAMILIES)}"
         )
-    model = MODELS[family]
+    try:
+        model = model_for(family, template)
+    except (ModelError, ValueError) as exc:
+        raise PathSynthesisError(str(exc)) from None
     if timing is None:
         timing = "prescribed" if angles is not None else "free"
     if timing not in TIMINGS:
@@ -1263,7 +1318,13 @@ assembling at every target was found ...
     if not (goal >= 0 and math.isfinite(goal)):
         raise PathSynthesisError(f"target: must be a non-negative error, got {target!r}")
     unknowns = int(problem.free.sum()) + 1
-    pop = max(32, 8 * unknowns) if population is None else int(population)
+    scale = getattr(model, "search_scale", 1.0)
+    if population is not None:
+        pop = int(population)
+    else:
+        pop = max(32, 8 * unknowns) if scale == 1.0 else max(12, int(8 * unknowns * scale))
+    if template is not None and isinstance(model, GenericModel):
+        problem.seeds = _seed_genes(problem, model.seeds(T, anchor=problem.anchor, angles=ang))
     if pop < 8:
         raise PathSynthesisError(f"population: need at least 8 members, got {pop}")
     rng = np.random.default_rng(seed)
@@ -1300,7 +1361,7 @@ assembling at every target was found ...
             return "budget"
         return None
 
-    generations = GENERATIONS
+    generations = GENERATIONS if scale == 1.0 else max(10, int(GENERATIONS * scale))
     while True:
         evo = _Evolution(problem, pop, rng)
         last, flat = np.inf, 0
@@ -1325,7 +1386,9 @@ assembling at every target was found ...
         full, asm = problem.full_params(pool[order])
         span = np.where(problem.hi > problem.lo, problem.hi - problem.lo, 1.0)
         chosen: list[int] = []
-        for part, quota in ((range(len(evo.X)), STARTS), (range(len(evo.X), len(order)), EXTRA)):
+        quotas = (problem.starts, problem.extra)
+        parts = (range(len(evo.X)), range(len(evo.X), len(order)))
+        for part, quota in zip(parts, quotas, strict=True):
             taken = 0
             for i in part:
                 if taken == quota:

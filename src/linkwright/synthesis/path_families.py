@@ -125,6 +125,19 @@ class Model:
     def pose_names(self) -> tuple[str, ...]:
         return ("x", "y", "frame_angle") if self.space == "plane" else ("lon", "sinlat", "spin")
 
+    @property
+    def linear(self) -> tuple[str, ...]:
+        """Shape parameters in the targets' units (they scale with them): plane only."""
+        return (*self.lengths, "u", "v", "offset") if self.space == "plane" else ()
+
+    @property
+    def traced(self) -> str:
+        return "P"
+
+    def input_offset(self, pose: Any) -> float:
+        """How far the user frame's input is from the local frame's: the frame's angle."""
+        return 0.0 if self.space == "sphere" else float(pose[2])
+
     def default_bounds(self, size: float, centre: Array) -> dict[str, tuple[float, float]]:
         """Bounds of every parameter for targets of diameter ``size`` around ``centre``."""
         if self.space == "plane":

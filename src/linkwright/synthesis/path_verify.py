@@ -1,0 +1,165 @@
+"""Verification of a path-synthesis candidate of a family with a generic search model.
+
+The candidate is rebuilt in the targets' frame (:meth:`GenericModel.placed`) and solved there by
+the plan-based engine, on the configuration the search chose (followed through a triad's
+poses: :meth:`GenericModel.reach`); its error is recomputed from those positions, its inputs'
+path checked against the limit positions of its circuit, and its constraints against
+:mod:`linkwright.analysis`. See :func:`linkwright.synthesis.path.fit_path`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from linkwright.analysis.general import dyad_transmission_angles
+from linkwright.mechanisms import circuit, input_range
+
+__all__ = ["in_one_arc", "verify_generic"]
+
+Array = NDArray[np.float64]
+DENSE = 720
+"""Samples of the period on which a candidate's whole circuit is checked."""
+REFINE_ROUNDS = 40
+"""Golden-section rounds that move a nearest-point fit's inputs to their targets' feet."""
+
+
+def in_one_arc(vmin: float, vmax: float, lo: Array, hi: Array, period: float) -> bool:
+    """Whether [vmin, vmax] lies inside one of the arcs [lo, hi] (modulo ``period``)."""
+    tol = 1e-9
+    for a, b in zip(lo, hi, strict=True):
+        if not np.isfinite(a):
+            continue
+        k = math.floor((vmin - a + tol) / period)
+        if vmax - k * period <= b + tol and vmin - k * period >= a - tol:
+            return True
+    return False
+
+
+def verify_generic(p: Any, cand: Any) -> tuple[dict[str, Any] | None, str]:
+    """(the fit's numbers, "") or (None, why it fails), for problem ``p`` and ``cand``."""
+    m = p.model
+    shape = {k: float(v) for k, v in cand.shape.items()}
+    mech, named, R = m.placed(shape, cand.assembly, cand.pose)
+    local = m.local(shape, float(cand.assembly))
+    psi = m.input_offset(cand.pose)
+    transform = _transform(m.space, cand.pose, R)
+
+    def reach(inputs: Array) -> tuple[Array, NDArray[np.bool_], dict[str, Array]]:
+        return m.reach(  # type: ignore[no-any-return]
+            mech, local, cand.assembly, inputs, psi, transform, p.anchor
+        )
+
+    rel = np.asarray(cand.rel, float).copy()
+    if m.triads:
+        dense = psi + np.linspace(0.0, p.period, DENSE, endpoint=False)
+        ok = reach(dense)[1]
+        if not ok.any():
+            return None, "the linkage never assembles on its configuration"
+        full = bool(ok.all())
+        arcs = None
+    else:
+        arcs = input_range(mech)
+        if bool(np.asarray(arcs.never)):
+            return None, "the linkage never assembles"
+        full = bool(np.asarray(arcs.full))
+    if p.timing == "none" and full:
+        rel = _reproject(p.targets, reach, psi, rel, p.period)
+    inputs = rel + psi
+    reached, valid, branches = reach(inputs)
+    if not valid.all():
+        return None, "a target's input cannot be assembled"
+    dist = np.sqrt(np.sum((reached - p.targets) ** 2, axis=-1))
+    if not full:
+        if arcs is not None:
+            lo, hi = np.asarray(arcs.lo).ravel(), np.asarray(arcs.hi).ravel()
+            inside = in_one_arc(inputs.min(), inputs.max(), lo, hi, float(np.asarray(arcs.period)))
+        else:
+            inside = bool(reach(np.linspace(inputs.min(), inputs.max(), DENSE // 2))[1].all())
+        if not inside:
+            return None, "the input passes a limit position between targets"
+    if p.timing == "free":
+        steps = np.diff(rel) * np.sign(np.sum(np.diff(rel)) or 1.0)
+        if np.any(steps < -1e-12) or np.sum(np.abs(np.diff(rel))) > p.period + 1e-9:
+            return None, "the free timing is not monotonic within one turn"
+    if p.full_turn and not full:
+        return None, "its input does not turn fully"
+    if p.mu > 0:
+        gam = dyad_transmission_angles(mech, circuit(mech, 2048, order=0))
+        lo_g = min(float(np.nanmin(g)) for g in gam.values())
+        hi_g = max(float(np.nanmax(g)) for g in gam.values())
+        if lo_g < p.mu or hi_g > np.pi - p.mu:
+            return None, (
+                f"its transmission angles span [{np.degrees(lo_g):.3f}°, "
+                f"{np.degrees(hi_g):.3f}°], outside [{np.degrees(p.mu):.3f}°, "
+                f"{180 - np.degrees(p.mu):.3f}°]"
+            )
+    if m.triads:
+        # The document names the configuration met at the first target (a pose is a name at
+        # one input).
+        first = {k: v[0] for k, v in branches.items()}
+        mech = named = m.with_branches(mech, first)
+    error = float(np.sum(dist**2))
+    return dict(
+        mechanism=mech,
+        named=named,
+        rotation=R,
+        inputs=inputs,
+        angles=rel,
+        reached=reached,
+        distances=dist,
+        error=error,
+        rms=math.sqrt(error / p.n),
+    ), ""
+
+
+def _transform(space: str, pose: Any, R: Array | None) -> Callable[[Array], Array]:
+    """Local positions → the targets' frame."""
+    if space == "sphere":
+        rot = np.eye(3) if R is None else np.asarray(R)
+        return lambda q: np.asarray(q) @ rot.T
+    x, y, a = (float(v) for v in pose)
+    c, s = math.cos(a), math.sin(a)
+
+    def move(q: Array) -> Array:
+        q = np.asarray(q)
+        return np.stack((x + c * q[..., 0] - s * q[..., 1], y + s * q[..., 0] + c * q[..., 1]), -1)
+
+    return move
+
+
+def _reproject(
+    targets: Array,
+    reach: Callable[[Array], tuple[Array, NDArray[np.bool_], Any]],
+    psi: float,
+    rel: Array,
+    period: float,
+) -> Array:
+    """Move each target's input to the nearest point of the whole curve: the nearest of a dense
+    sampling, then golden-section search between its neighbours, every target in one batch."""
+    dense = np.linspace(0.0, period, 2048, endpoint=False)
+    curve = reach(dense + psi)[0]
+    here = reach(rel + psi)[0]
+    d_dense = np.sum((curve[None] - targets[:, None]) ** 2, axis=-1)
+    d_dense = np.where(np.isfinite(d_dense), d_dense, np.inf)
+    j = np.argmin(d_dense, axis=1)
+    now = np.sum((here - targets) ** 2, axis=-1)
+    now = np.where(np.isfinite(now), now, np.inf)
+    step = dense[1] - dense[0]
+    a, b = dense[j] - step, dense[j] + step
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(REFINE_ROUNDS):
+        x1, x2 = b - g * (b - a), a + g * (b - a)
+        q = reach(np.concatenate([x1, x2]) + psi)[0]
+        f = np.sum((q - np.concatenate([targets, targets])) ** 2, axis=-1)
+        f = np.where(np.isfinite(f), f, np.inf)
+        left = f[: len(targets)] <= f[len(targets) :]
+        a, b = np.where(left, a, x1), np.where(left, x2, b)
+    best = 0.5 * (a + b)
+    fb = np.sum((reach(best + psi)[0] - targets) ** 2, axis=-1)
+    fb = np.where(np.isfinite(fb), fb, np.inf)
+    return np.where(fb < now, best, rel)
