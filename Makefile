@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test lint bench demo browser clean
+.PHONY: run test lint bench demo browser clean docs
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -22,6 +22,11 @@ run: $(STAMP)
 demo: $(STAMP)
 	$(BIN)/linkwright demo --out out
 
+# The documentation site: API reference, gallery (every example runs), CLI and family guides.
+docs: $(STAMP)
+	$(BIN)/sphinx-build -b html -W --keep-going docs docs/_build/html
+	@echo "open docs/_build/html/index.html"
+
 # The browser tests drive Debian's chromium (Playwright's own browser downloads are not used).
 browser:
 	@command -v chromium >/dev/null 2>&1 || { \
@@ -32,11 +37,15 @@ browser:
 
 test: $(STAMP) browser
 	$(BIN)/ruff check src tests bench
+	$(BIN)/mypy
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -n 2
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tests bench
 	$(BIN)/ruff format --check src tests bench
+	$(BIN)/mypy
+	$(BIN)/lint-imports
 
 BENCH_STAMP := $(VENV)/.bench-installed
 
@@ -46,10 +55,14 @@ $(BENCH_STAMP): $(STAMP)
 
 bench: $(BENCH_STAMP)
 	$(BIN)/python bench/run.py
+	$(BIN)/python bench/compiled.py
+	for f in geared-fivebar stephenson3 watt1; do \
+		$(BIN)/python bench/descriptors.py --family $$f --curves 500000; done
+	$(BIN)/python bench/forces.py
 	$(BIN)/python bench/synthesis.py
 	$(BIN)/python bench/atlas.py
 	$(BIN)/python bench/workbench.py
 	$(BIN)/python bench/load.py
 
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) out .pytest_cache docs/_build docs/generated

@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from linkwright.analysis import analyze as analyze_result
 from linkwright.analysis import (
-    analyze,
     coefficients,
     fourbar_class,
     output_extremes,
@@ -20,8 +20,15 @@ from linkwright.analysis import (
     transmission_angle,
     transmission_extremes,
 )
+from linkwright.io.report import analysis_report
 from linkwright.mechanisms import FourBar, SliderCrank, circuit, input_range, solve
 from linkwright.papers.p003 import reproduce_planar
+
+
+def analyze(mechanism, **options):
+    """The report ``linkwright analyze`` prints (degrees) of the typed analysis (radians)."""
+    return analysis_report(analyze_result(mechanism, **options))
+
 
 # --- independent closed forms (Freudenstein), written here without the engine -----------------
 

@@ -24,7 +24,7 @@ from linkwright.mechanisms import (
     GearedFiveBar,
     input_range,
 )
-from linkwright.plot import animation as animate_module
+from linkwright.plot import animation_scene, animation_sphere, animation_writers
 from linkwright.plot.animation import AnimationError, animate
 
 EXAMPLES = Path(linkwright.__file__).parent / "examples"
@@ -87,7 +87,7 @@ def test_a_rocking_input_runs_both_legs_and_loops_seamlessly(tmp_path: Path) -> 
     for field in ("A0", "B0", "crank", "coupler", "rocker", "u", "v", "assembly"):
         np.testing.assert_array_equal(getattr(loaded, field), getattr(ROCKER_INPUT, field))
     frames = 12
-    cycle = animate_module._cycle(ROCKER_INPUT, frames)
+    cycle = animation_scene.sample_cycle(ROCKER_INPUT, frames)
     theta = cycle.motion.input[cycle.frames]
     # The input's limits, by the cosine rule: coupler and rocker fold in line, |A B0| = 5 ± 1,
     # with |A B0|² = 3.5² + 4² − 2·3.5·4·cos θ. The machine's circuit is the arc below the frame.
@@ -123,10 +123,10 @@ def test_a_rocking_input_runs_both_legs_and_loops_seamlessly(tmp_path: Path) -> 
 def test_a_gear_ratio_runs_every_turn_before_the_film_loops() -> None:
     # Geared at 1/2 the linkage repeats after two input turns (period 4π): the film covers both.
     half = GearedFiveBar(A0=[0, 0], B0=[4, 0], crank1=1, crank2=1, link1=3, link2=3, ratio=0.5)
-    cycle = animate_module._cycle(half, 8)
+    cycle = animation_scene.sample_cycle(half, 8)
     theta = cycle.motion.input[cycle.frames]
     np.testing.assert_allclose(theta, np.arange(8) * 4 * np.pi / 8, atol=1e-12)
-    labels = [animate_module._angle_label(cycle, i) for i in range(8)]
+    labels = [animation_scene.angle_label(cycle, i) for i in range(8)]
     assert labels[3] == "θ = 270.0°  (turn 1 of 2)"
     assert labels[4] == "θ = 0.0°  (turn 2 of 2)"
 
@@ -134,12 +134,14 @@ def test_a_gear_ratio_runs_every_turn_before_the_film_loops() -> None:
 @pytest.mark.parametrize("name", ["watt1", "spherical-sixbar"])
 def test_the_axes_stay_fixed_and_hold_every_frame(name: str) -> None:
     mechanism = load_document(EXAMPLES / EXAMPLE_OF[name]).mechanism
-    cycle = animate_module._cycle(mechanism, 10)
+    cycle = animation_scene.sample_cycle(mechanism, 10)
     build = (
-        animate_module._sphere_scene if mechanism.space == "sphere" else animate_module._plane_scene
+        animation_sphere.sphere_scene
+        if mechanism.space == "sphere"
+        else animation_scene.plane_scene
     )
     scene = build(mechanism, cycle, "test", DPI)
-    renderer = animate_module._Renderer(scene)
+    renderer = animation_writers.Renderer(scene)
     limits = (scene.ax.get_xlim(), scene.ax.get_ylim())
     shapes = {renderer.frame(i).shape for i in range(scene.frames)}
     assert (scene.ax.get_xlim(), scene.ax.get_ylim()) == limits
@@ -248,7 +250,7 @@ def test_random_four_bar_films_are_closed_cycles_of_real_poses(
     )
     arcs = input_range(fourbar)
     assume(not bool(arcs.never))
-    cycle = animate_module._cycle(fourbar, frames)
+    cycle = animation_scene.sample_cycle(fourbar, frames)
     assert len(cycle.frames) == frames
     pos = {k: v[cycle.frames] for k, v in cycle.motion.positions.items()}
     theta = cycle.motion.input[cycle.frames]
@@ -289,10 +291,10 @@ def test_a_rhombus_film_runs_through_its_fold(tmp_path: Path) -> None:
     # film runs through it on the branch it is on (B = A + B0 − A0, the parallelogram, there
     # (2, 0)), and takes two turns to repeat: the dyad's sign flips each time A passes B0.
     rhombus = FourBar(A0=[0, 0], B0=[1, 0], crank=1, coupler=1, rocker=1, u=0.5, v=0.3)
-    cycle = animate_module._cycle(rhombus, 6)
+    cycle = animation_scene.sample_cycle(rhombus, 6)
     assert cycle.motion.valid[cycle.frames].all() and cycle.turns == 2
     np.testing.assert_allclose(cycle.motion.positions["B"][cycle.frames[0]], [2.0, 0.0])
-    assert animate_module._angle_label(cycle, 0) == "θ = 0.0°  (turn 1 of 2)"
+    assert animation_scene.angle_label(cycle, 0) == "θ = 0.0°  (turn 1 of 2)"
     images, _, _ = frames_of(animate(rhombus, tmp_path / "r.gif", frames=6, dpi=DPI))
     assert len(images) == 6
 
@@ -301,8 +303,8 @@ def test_a_pose_that_does_not_assemble_says_so() -> None:
     # No traced circuit leaves a pose out any more; should one (a joint a rounding error from
     # undetermined), its frame shows the ground and says so.
     rhombus = FourBar(A0=[0, 0], B0=[1, 0], crank=1, coupler=1, rocker=1, u=0.5, v=0.3)
-    cycle = animate_module._cycle(rhombus, 6)
+    cycle = animation_scene.sample_cycle(rhombus, 6)
     valid = cycle.motion.valid.copy()
     valid[cycle.frames[1]] = False
     holed = replace(cycle, motion=replace(cycle.motion, valid=valid))
-    assert animate_module._angle_label(holed, 1) == "θ = 120.0°  (turn 1 of 2)\nnot assembled here"
+    assert animation_scene.angle_label(holed, 1) == "θ = 120.0°  (turn 1 of 2)\nnot assembled here"

@@ -23,9 +23,9 @@ import warnings
 from pathlib import Path
 
 import pytest
+from documents_helpers import with_change as changed
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
-from test_documents import with_change as changed
 
 from linkwright.cli import main
 from linkwright.io.documents import WORKING_RANGE, dumps_toml

@@ -282,13 +282,14 @@ def test_flat_closures_decide_without_warnings(link1, link2, b0):
     import warnings
 
     from linkwright.analysis import analyze
+    from linkwright.io.report import analysis_report
     from linkwright.mechanisms import GearedFiveBar, input_range
 
     m = GearedFiveBar(A0=[0, 0], B0=b0, crank1=4, crank2=4, link1=link1, link2=link2, ratio=1)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         arcs = input_range(m)
-        report = analyze(m)
+        report = analysis_report(analyze(m))
     # |A B| = |B0 − A0| at every input: the dyad closes everywhere or nowhere, by the triangle
     # inequality on 1 (or 0, coincident pivots: never), link1 and link2.
     d = math.dist(b0, [0, 0])

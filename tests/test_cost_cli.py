@@ -20,9 +20,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import linkwright
 from linkwright import cli
-from linkwright.cli_budget import stream_solve
+from linkwright.cli import shared as cli_shared
+from linkwright.cli.budget import stream_solve
+from linkwright.cli.solve import _solve_text
 from linkwright.io import document_to_dict, load_example
+from linkwright.io.results import solve_document
 
 CAP_BYTES = 2_500_000_000
 """The address space each command may use: a hostile one that slipped through fails with a
@@ -31,6 +35,8 @@ TIMEOUT_S = 240
 QUICK_RSS = 400 * 2**20
 """A refusal computes nothing: its process stays near the interpreter's own size."""
 
+# The peak is the process's own high-water mark (VmHWM, kilobytes): ru_maxrss survives the
+# fork and exec from the test's worker, so it starts at the worker's size, however large.
 DRIVER = """
 import resource, sys
 from linkwright.cli import main
@@ -38,6 +44,13 @@ try:
     status = main(sys.argv[1:])
 finally:
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    try:
+        with open("/proc/self/status") as status_file:
+            for line in status_file:
+                if line.startswith("VmHWM:"):
+                    peak = int(line.split()[1])
+    except OSError:
+        pass
     sys.stderr.write(f"\\nMAXRSS {peak}\\n")
 sys.exit(status)
 """
@@ -223,7 +236,7 @@ def test_solve_all_streams_its_rows_in_bounded_memory(tmp_path) -> None:
 
 def _drawn(path: Path, n: int) -> None:
     """The bundled hand-drawn curve, closed and interpolated to ``n`` points."""
-    rows = cli.read_points(Path(cli.__file__).parent / "examples" / "drawn-curve.csv")
+    rows = cli_shared.read_points(Path(linkwright.__file__).parent / "examples" / "drawn-curve.csv")
     p = np.vstack([rows, rows[:1]])
     t = np.linspace(0.0, len(p) - 1.0, n + 1)[:-1]
     q = np.column_stack([np.interp(t, np.arange(len(p)), p[:, i]) for i in range(2)])
@@ -267,26 +280,26 @@ def test_atlas_query_refines_twenty_thousand_points_in_bounded_memory(tmp_path) 
 )
 @pytest.mark.parametrize("chunk", [1, 7, 10_000])
 def test_streamed_solve_is_the_whole_answer(name, all_, derivatives, chunk) -> None:
-    doc = cli._load(name)
+    doc = cli_shared.load_file(name)
     degrees = cli.parse_inputs("0:359:13")
-    whole = cli.solve_document(doc, degrees, all_configurations=all_, derivatives=derivatives)
+    whole = solve_document(doc, degrees, all_configurations=all_, derivatives=derivatives)
     for as_json in (False, True):
         buffer = io.StringIO()
         stream_solve(
             degrees,
             chunk,
-            lambda part: cli.solve_document(
+            lambda part: solve_document(
                 doc, part, all_configurations=all_, derivatives=derivatives
             ),
-            lambda result: cli._solve_text(doc, result, derivatives),
-            cli._jsonable,
+            lambda result: _solve_text(doc, result, derivatives),
+            cli_shared.to_json_ready,
             buffer,
             as_json=as_json,
         )
         if as_json:
-            assert json.loads(buffer.getvalue()) == json.loads(cli._dump(whole))
+            assert json.loads(buffer.getvalue()) == json.loads(cli_shared.dump_json(whole))
         else:
-            assert buffer.getvalue() == cli._solve_text(doc, whole, derivatives)
+            assert buffer.getvalue() == _solve_text(doc, whole, derivatives)
 
 
 def test_bundled_examples_still_run_at_the_defaults(capsys) -> None:

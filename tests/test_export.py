@@ -614,7 +614,7 @@ def test_samples_that_do_not_assemble_break_the_curves_into_open_pieces(
 ):
     import dataclasses
 
-    import linkwright.io.exports as module
+    import linkwright.io.export_geometry as module
     from linkwright.mechanisms import circuit
 
     def with_a_gap(mechanism, samples, **kwargs):

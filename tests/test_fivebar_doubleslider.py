@@ -12,14 +12,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from linkwright.analysis import analyze as analyze_result
 from linkwright.analysis import (
-    analyze,
     conic_invariants,
     doubleslider_conic,
     ellipse_axes,
     normalise_conic,
 )
 from linkwright.engine import Crank, DyadRRR, Fixed, Plan, Rigid, evaluate, input_arcs, trace
+from linkwright.io.report import analysis_report
 from linkwright.mechanisms import (
     DoubleSlider,
     GearedFiveBar,
@@ -28,6 +29,12 @@ from linkwright.mechanisms import (
     input_range,
     solve,
 )
+
+
+def analyze(mechanism, **options):
+    """The report ``linkwright analyze`` prints (degrees) of the typed analysis (radians)."""
+    return analysis_report(analyze_result(mechanism, **options))
+
 
 RESIDUAL_TOL = 1e-10
 

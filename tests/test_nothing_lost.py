@@ -5,7 +5,7 @@ Document saves (and every file the command line writes) go through one recipe,
 rename it over the target, fsync the folder. These tests kill real processes with SIGKILL
 while they save, over and over, and check that what is on disk is always one whole version.
 The workbench library's SQLite transactions have their own kill test
-(``tests/test_server_library.py``); atlas shards are checked by their digests on resume, and
+(``tests/test_server_library_store.py``); atlas shards are checked by their digests on resume, and
 a shard damaged after its digest was written is rebuilt, not trusted.
 """
 

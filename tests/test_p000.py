@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from linkwright.geometry import sphere
 from linkwright.mechanisms import SphericalFourBar, circuit, solve
-from linkwright.papers import p000
+from linkwright.papers import p000, p000_formulas
 from linkwright.papers.p000 import (
     InvalidInput,
     eq4_rocker_joint,
@@ -219,7 +219,7 @@ def test_eq5_closes_the_linkage_and_is_mode_plus_one(arcs, theta2):
     B0 = np.array([math.cos(a1), math.sin(a1), 0.0])
     # Eq. 5 solves q cos θ4 + p sin θ4 = u by the half-angle substitution; its quotient is 0/0
     # where q + u = 0 (identically so when a1 = a4 and a2 = a3), so keep clear of that.
-    p, q, u = p000._eq5_pqu(a1, a2, a3, a4, theta2)
+    p, q, u = p000_formulas.eq5_pqu(a1, a2, a3, a4, theta2)
     assume(abs(q + u) >= 1e-3 * (abs(p) + abs(q) + abs(u)))
     assume(math.sin(float(sphere.arc(A, B0))) >= 1e-6)  # A on ±B0: the dyad is indeterminate
     for sign, mode in ((-1, 1.0), (1, -1.0)):

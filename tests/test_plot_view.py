@@ -30,7 +30,7 @@ from linkwright.mechanisms import (
     solve,
 )
 from linkwright.plot import save_figure
-from linkwright.plot.generic import _features
+from linkwright.plot.generic import find_features
 from linkwright.plot.view import PlotError, plot_mechanism
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "src" / "linkwright" / "examples"
@@ -199,7 +199,7 @@ def test_four_bar_dead_centres_property(crank, coupler, rocker, frame, assembly)
     m = FourBar(
         A0=[0, 0], B0=[frame, 0], crank=crank, coupler=coupler, rocker=rocker, assembly=assembly
     )
-    feats = _features(m, 48)
+    feats = find_features(m, 48)
     dead = feats.of("dead")
     assert len(dead) == 2
     reach = sorted(float(np.linalg.norm(d.pose["B"])) for d in dead)
@@ -229,7 +229,7 @@ def test_six_bar_dead_centres_property(crank, coupler, rocker, link1, link2):
         link1=link1,
         link2=link2,
     )
-    feats = _features(m, 60)
+    feats = find_features(m, 60)
     assume(feats.own.circuits)
     dead = feats.of("dead")
     assert dead
@@ -369,7 +369,7 @@ def test_spherical_dead_centres_have_crank_and_coupler_in_line():
     # Paper 000's Fig. 6: the output B0B stops where A lies on the great circle A0 B, so that
     # arc A0B = coupler ± crank (45° ± 20°).
     m = example("paper000-fig6-crank-rocker").mechanism
-    feats = _features(m, 60)
+    feats = find_features(m, 60)
     dead = feats.of("dead")
     assert len(dead) == 2
     arcs = sorted(math.degrees(math.acos(np.clip(d.pose["A0"] @ d.pose["B"], -1, 1))) for d in dead)
@@ -498,7 +498,7 @@ def test_linkages_with_a_triad_are_drawn_with_every_circuit(make, tmp_path):
     fig = plot_mechanism(m, samples=48)
     save_figure(fig, tmp_path / "triad.png")
     assert mpimg.imread(tmp_path / "triad.png").shape[0] > 100
-    features = _features(m, 48)
+    features = find_features(m, 48)
     circuits = features.own.circuits
     assert circuits and all(c.valid.all() for c in circuits)
     turns = {round(float(mark.theta), 6) for mark in features.of("limit")}

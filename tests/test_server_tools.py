@@ -623,7 +623,7 @@ def test_study_any_fourbar(client, crank, coupler, rocker, frame, u, v, heading,
     """For random four-bars moved either pivot in any direction: the pivot lands k·step away
     along the heading, "full" and "assembles" follow the closed form of the frame length, and
     every traced point has a pose with the document's link lengths."""
-    # An exact deltoid puts A on B0, where B is undetermined (tests/test_singular.py's case).
+    # An exact deltoid puts A on B0, where B is undetermined (tests/test_singular_exact.py's case).
     assume(crank != frame or coupler != rocker)
     mechanism = {"family": "fourbar", "A0": [0.0, 0.0], "B0": [frame, 0.0], "crank": crank,
                  "coupler": coupler, "rocker": rocker, "point": {"u": u, "v": v}}  # fmt: skip
@@ -648,7 +648,7 @@ def test_study_any_fourbar(client, crank, coupler, rocker, frame, u, v, heading,
             assert s["full"] == full and s["assembles"] == (not never)
         P = finite_rows(s["curves"].get("P", []))
         # At a change point (s + l = p + q) A can pass a hair from B0, where positions carry
-        # rounding far above 1e-7 (tests/test_singular.py bounds that case on its own).
+        # rounding far above 1e-7 (tests/test_singular_exact.py bounds that case on its own).
         s_, p_, q_, l_ = sorted((f, crank, coupler, rocker))
         change_point = abs(s_ + l_ - p_ - q_) <= 1e-9 * l_
         if len(P) and not change_point:

@@ -177,12 +177,16 @@ def test_fourbar_derivatives_match_differences(a1, a2, a3, a4, pa, pu, sign):
     m = solve(mech, theta)
     keep, h = stencil_ok(mech, m)
     assume(keep.any())
-    for order, derivs in ((1, m.velocities), (2, m.accelerations)):
+    for order, derivs, weight in ((1, m.velocities, 2.0), (2, m.accelerations, 6.05)):
         fd = central_difference(mech, theta, order, h)
+        # The stencil's rounding: positions placed to ~1e-14 (margins > 0.02, pivots apart),
+        # times the sum of its |weights| over h^order; h shrinks for fast joints, so this can
+        # pass 1e-6 (seen: 5e-6 on accelerations with h ~ 3e-5).
+        rounding = (1e-14 * weight / h[:, None] ** order)[keep]
         for name in ("A", "B", "P"):
             err = np.abs(fd[name] - derivs[name])[keep]
             scale = 1.0 + np.abs(derivs[name][keep])
-            assert np.all(err <= 1e-6 * scale), (name, order, err.max())
+            assert np.all(err <= 1e-6 * scale + rounding), (name, order, err.max())
 
 
 @settings(max_examples=40)

@@ -15,7 +15,6 @@ from hypothesis import strategies as st
 from linkwright.analysis import (
     InvalidHingeRatio,
     NotASphericalFourBar,
-    analyze,
     balanced_mu,
     coefficients,
     fourbar_class,
@@ -33,9 +32,17 @@ from linkwright.analysis import (
     transmission_angle,
     transmission_extremes,
 )
+from linkwright.analysis import analyze as analyze_result
 from linkwright.analysis.extrema import circuit_extremum
 from linkwright.geometry import sphere
+from linkwright.io.report import analysis_report
 from linkwright.mechanisms import FourBar, SphericalFourBar, circuit, input_range, solve
+
+
+def analyze(mechanism, **options):
+    """The report ``linkwright analyze`` prints (degrees) of the typed analysis (radians)."""
+    return analysis_report(analyze_result(mechanism, **options))
+
 
 DEG = np.pi / 180.0
 arc_deg = st.floats(5.0, 175.0)

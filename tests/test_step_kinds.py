@@ -437,7 +437,7 @@ def test_a_spherical_dyad_says_why_it_cannot_close():
 def test_a_triads_failure_is_explained_by_the_triad():
     """solve on a Stephenson III driven at its output named no step where the triad had no
     pose ("the triad cannot close"); the triad's own sentence names its links."""
-    from linkwright.cli import solve_document
+    from linkwright.io.results import solve_document
 
     doc = load_example("stephenson3-output")
     mech = dataclasses.replace(doc.mechanism, rocker=np.float64(1.0))

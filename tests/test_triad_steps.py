@@ -374,7 +374,7 @@ def test_plane_triad_derivatives_match_central_difference(seed):
         if not m.regular[0]:
             continue
         closure = np.abs(m.margins["A"][0])
-        if closure < 0.05:  # near a limit: tests/test_singular.py's business, not a difference's
+        if closure < 0.05:  # near a limit: tests/test_singular_*.py's business, not a difference's
             continue
         # The input is within about closure² of a limit, where the pose turns back: the
         # differences stay well inside that.

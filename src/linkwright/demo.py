@@ -71,6 +71,7 @@ def run_demo(out_dir: str | Path = "out") -> str:
     """
     from linkwright.analysis import analyze
     from linkwright.io import list_examples, load_example
+    from linkwright.io.report import analysis_report
     from linkwright.papers import p000, p001, p002, p003, p004
     from linkwright.plot import (
         DiagramError,
@@ -89,7 +90,7 @@ def run_demo(out_dir: str | Path = "out") -> str:
     for i, name in enumerate(names, 1):
         print(f"[{i}/{len(names)}] {name}", file=sys.stderr, flush=True)
         doc = load_example(name)
-        report = analyze(doc.mechanism)
+        report = analysis_report(analyze(doc.mechanism))
         reports[name] = {"title": doc.title, **report}
         try:
             save_figure(plot_mechanism(doc.mechanism, title=doc.title), out / f"{name}-curves.png")

@@ -9,22 +9,18 @@ limit position and transmits badly.
 
 from __future__ import annotations
 
-import math
-from typing import Any
-
 import numpy as np
 from numpy.typing import NDArray
 
-from linkwright.engine import DyadRRP, DyadRRR, Motion, SphereDyad, input_turns
-from linkwright.engine.continuation import every_circuit
-from linkwright.engine.plan import placed_joints
+from linkwright.engine import DyadRRP, DyadRRR, Motion, SphereDyad
 from linkwright.geometry import plane, sphere
-from linkwright.mechanisms.base import Mechanism, circuit, input_range
+from linkwright.mechanisms.base import Mechanism
 
-__all__ = ["dyad_transmission_angles", "general_report", "point_speed"]
+__all__ = ["dyad_transmission_angles", "point_speed"]
 
 Array = NDArray[np.float64]
 REPORT_SAMPLES = 2048
+"""Circuit samples :func:`linkwright.analysis.general_analysis` reads its extremes from."""
 
 
 def dyad_transmission_angles(mechanism: Mechanism, motion: Motion) -> dict[str, Array]:
@@ -83,113 +79,5 @@ def point_speed(motion: Motion, joint: str) -> Array:
     """
     if motion.velocities is None:
         raise ValueError("the motion has no velocities: solve it with order ≥ 1")
-    return np.linalg.norm(motion.velocities[joint], axis=-1)
-
-
-def _num(x: Any, digits: int = 12) -> float | None:
-    v = float(x)
-    return round(v, digits) if math.isfinite(v) else None
-
-
-def _deg(x: Any) -> float | None:
-    return _num(np.degrees(float(x)))
-
-
-def _extreme(values: Any, largest: bool) -> float:
-    """The least or greatest finite value, NaN when there is none (every sample at a toggle,
-    say) rather than NumPy's all-NaN warning."""
-    finite = np.asarray(values, dtype=float)
-    finite = finite[np.isfinite(finite)]
-    if finite.size == 0:
-        return math.nan
-    return float(finite.max() if largest else finite.min())
-
-
-def general_report(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> dict[str, Any]:
-    """The kinematic report of any single linkage the engine builds (degrees; JSON-ready).
-
-    Keys: ``family``, ``assembles``, ``period_turns`` (input turns before the linkage repeats),
-    ``input_turns_fully``, ``input_arcs_deg`` (absolute input angles), ``limit_positions``
-    (each ``{"input_deg", "dyad"}``: exact roots, the dyad that reaches its limit there; for a
-    linkage with a triad every limit of every circuit, ``{"input_deg", "triad", "circuit",
-    "poses"}``: the two pose indices that merge there, as the circuit arrives and leaves),
-    ``transmission_angle_deg`` (per dyad: ``min``, ``max`` over the circuit),
-    ``traced`` (per traced joint: ``path_length``, ``speed_min``, ``speed_max`` per radian of
-    input) and ``samples`` (how many circuit samples the extremes were read from: they are
-    sampled, not refined, so good to about (period/samples)² of the curvature).
-    """
-    if mechanism.batch_shape != ():
-        raise ValueError("a report is on one mechanism; index the batch first")
-    plan = mechanism.plan
-    arcs = input_range(mechanism)
-    turns = int(input_turns(plan, mechanism.params(), points=mechanism.points))
-    dyads = plan.dyads
-    report: dict[str, Any] = {
-        "family": mechanism.family,
-        "assembles": not bool(arcs.never),
-        "period_turns": turns,
-        "input_turns_fully": bool(arcs.full),
-    }
-    finite = [
-        (lo, hi, dl, dh)
-        for lo, hi, dl, dh in zip(arcs.lo, arcs.hi, arcs.dyad_lo, arcs.dyad_hi, strict=True)
-        if math.isfinite(lo)
-    ]
-    report["input_arcs_deg"] = [[_deg(lo), _deg(hi)] for lo, hi, _, _ in finite]
-    report["limit_positions"] = [
-        {"input_deg": _deg(x), "dyad": dyads[int(d)].name if d >= 0 else None}
-        for lo, hi, dl, dh in finite
-        for x, d in ((lo, dl), (hi, dh))
-    ]
-    if plan.triads:
-        # A triad's configurations are followed: every limit of every circuit, where two of
-        # its poses merge (the circuit may turn there more often than at its arc's ends).
-        found = every_circuit(plan, mechanism.params(), 360, points=mechanism.points, order=0)
-        report["circuits"] = len(found)
-        report["limit_positions"] = [
-            {
-                "input_deg": _deg(limit.input),
-                "triad": "".join(placed_joints(triad)),
-                "circuit": k,
-                "poses": [int(limit.before[triad.name]), int(limit.after[triad.name])],
-            }
-            for k, c in enumerate(found)
-            for limit in c.limits
-            for triad in plan.triads
-            if limit.before[triad.name] != limit.after[triad.name]
-        ]
-    if arcs.never:
-        report["reason"] = (
-            "some dyad cannot close at any input"
-            if not plan.triads
-            else f"{plan.triads[0].unassembled()} at any input"
-        )
-        report["transmission_angle_deg"] = {d.name: {"min": None, "max": None} for d in dyads}
-        report["traced"] = {
-            j: {"path_length": None, "speed_min": None, "speed_max": None} for j in plan.traced
-        }
-        report["samples"] = 0
-        return report
-    motion = circuit(mechanism, samples, order=1)
-    angles = dyad_transmission_angles(mechanism, motion)
-    report["transmission_angle_deg"] = {
-        name: {"min": _deg(_extreme(a, False)), "max": _deg(_extreme(a, True))}
-        for name, a in angles.items()
-    }
-    traced: dict[str, Any] = {}
-    for joint in plan.traced:
-        pos = motion.positions[joint]
-        closed = np.concatenate((pos, pos[:1]), axis=0)
-        if plan.space == "sphere":  # arc length on the unit sphere, radians
-            length = np.nansum(sphere.arc(closed[:-1], closed[1:]))
-        else:
-            length = np.nansum(plane.norm(np.diff(closed, axis=0)))
-        speed = point_speed(motion, joint)
-        traced[joint] = {
-            "path_length": _num(length),
-            "speed_min": _num(_extreme(speed, False)),
-            "speed_max": _num(_extreme(speed, True)),
-        }
-    report["traced"] = traced
-    report["samples"] = samples
-    return report
+    speed: Array = np.linalg.norm(motion.velocities[joint], axis=-1)
+    return speed

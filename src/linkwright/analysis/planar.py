@@ -16,6 +16,9 @@ both spaces.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -45,6 +48,16 @@ TWO_PI = 2.0 * np.pi
 # Lengths equal to this relative tolerance count as equal when classifying (s + l = p + q).
 CLASS_TOL = 1e-12
 
+
+def _slider(mechanism: Mechanism) -> SliderCrank:
+    """The slider-crank a planar analysis is left with once four-bars are handled."""
+    if not isinstance(mechanism, SliderCrank):
+        raise TypeError(
+            f"{type(mechanism).__name__}: this analysis is for four-bars and slider-cranks"
+        )
+    return mechanism
+
+
 # Every name fourbar_class can give, planar and spherical.
 FOURBAR_CLASSES = (
     "change-point",
@@ -69,7 +82,8 @@ def grashof(fb: FourBar) -> Array:
     """
     links = np.stack(_lengths(fb), axis=-1)
     s, l = links.min(axis=-1), links.max(axis=-1)
-    return (2.0 * (s + l) - links.sum(axis=-1)) / l
+    excess: Array = (2.0 * (s + l) - links.sum(axis=-1)) / l
+    return excess
 
 
 def fourbar_class(fb: FourBar) -> NDArray[np.str_]:
@@ -131,8 +145,9 @@ def transmission_angle(mechanism: Mechanism, motion: Motion) -> Array:
     if isinstance(mechanism, FourBar):
         w = motion.positions["B0"] - B
     else:
-        w = np.broadcast_to(plane.perp(mechanism.direction)[..., None, :], u.shape)
-    return np.arctan2(np.abs(plane.cross(u, w)), plane.dot(u, w))
+        w = np.broadcast_to(plane.perp(_slider(mechanism).direction)[..., None, :], u.shape)
+    gamma: Array = np.arctan2(np.abs(plane.cross(u, w)), plane.dot(u, w))
+    return gamma
 
 
 def transmission_extremes(mechanism: Mechanism) -> dict[str, Array]:
@@ -177,23 +192,26 @@ def transmission_extremes(mechanism: Mechanism) -> dict[str, Array]:
     else:
         # cos γ = q/rod, q = e + crank·sin(θ − line angle) the signed distance of A from the line,
         # limited to [−rod, rod] where the input cannot turn fully.
-        rod, crank, e = np.broadcast_arrays(mechanism.rod, mechanism.crank, mechanism.offset)
+        sc = _slider(mechanism)
+        rod, crank, e = np.broadcast_arrays(sc.rod, sc.crank, sc.offset)
         q_hi = np.minimum(e + crank, rod)
         q_lo = np.maximum(e - crank, -rod)
-        ang = np.asarray(mechanism.line_angle)
+        ang = np.asarray(sc.line_angle)
 
         def gam(q: Array) -> Array:
             # acos(q/rod) without the cancellation of acos near ±1.
-            return np.arctan2(np.sqrt(np.clip((rod - q) * (rod + q), 0.0, None)), q)
+            angle: Array = np.arctan2(np.sqrt(np.clip((rod - q) * (rod + q), 0.0, None)), q)
+            return angle
 
-        def input_at(q: Array) -> Array:
-            return np.arcsin(np.clip((q - e) / crank, -1.0, 1.0)) + ang
+        def input_at_offset(q: Array) -> Array:
+            theta: Array = np.arcsin(np.clip((q - e) / crank, -1.0, 1.0)) + ang
+            return theta
 
         out = {
             "min": gam(q_hi),
             "max": gam(q_lo),
-            "min_at": input_at(q_hi),
-            "max_at": input_at(q_lo),
+            "min_at": input_at_offset(q_hi),
+            "max_at": input_at_offset(q_lo),
         }
     never = arcs.never
     return {k: np.where(never, np.nan, v) for k, v in out.items()}
@@ -209,7 +227,8 @@ def output_angle(fb: FourBar | SphericalFourBar, motion: Motion) -> Array:
         return fb.output_angle(motion)
     rel = motion.positions["B"] - motion.positions["B0"]
     ang = np.arctan2(rel[..., 1], rel[..., 0]) - fb.frame_angle[..., None]
-    return np.angle(np.exp(1j * ang))
+    phi: Array = np.angle(np.exp(1j * ang))
+    return phi
 
 
 def output_rates(mechanism: Mechanism, motion: Motion) -> tuple[Array, Array]:
@@ -227,11 +246,13 @@ def output_rates(mechanism: Mechanism, motion: Motion) -> tuple[Array, Array]:
         rel = motion.positions["B"] - motion.positions["B0"]
         r2 = np.asarray(mechanism.rocker)[..., None] ** 2
         return plane.cross(rel, vel) / r2, plane.cross(rel, acc) / r2
-    d = mechanism.direction[..., None, :]
+    d = _slider(mechanism).direction[..., None, :]
     return plane.dot(vel, d), plane.dot(acc, d)
 
 
-def output_extremes(mechanism: Mechanism, *, motion: Motion | None = None) -> dict[str, Array]:
+def output_extremes(
+    mechanism: Mechanism, *, motion: Motion | None = None
+) -> dict[str, NDArray[Any]]:
     """Exact extremes of the output over the circuit and the inputs where they occur.
 
     Returns ``min``, ``max``, ``min_at``, ``max_at`` (radians, or lengths for a slider) and
@@ -259,8 +280,9 @@ def output_extremes(mechanism: Mechanism, *, motion: Motion | None = None) -> di
 
     def out(m: Motion) -> Array:
         if isinstance(mechanism, FourBar):
-            return np.angle(np.exp(1j * (output_angle(mechanism, m) - mid[..., None])))
-        return mechanism.slider_position(m)
+            turned: Array = np.angle(np.exp(1j * (output_angle(mechanism, m) - mid[..., None])))
+            return turned
+        return _slider(mechanism).slider_position(m)
 
     lo, lo_at, lo_branch = circuit_extremum(mechanism, out, sign=-1.0, motion=motion)
     hi, hi_at, hi_branch = circuit_extremum(mechanism, out, sign=1.0, motion=motion)
@@ -271,7 +293,14 @@ def output_extremes(mechanism: Mechanism, *, motion: Motion | None = None) -> di
     return {"min": lo, "max": hi, "min_at": lo_at, "max_at": hi_at, "turns": turns}
 
 
-def _polish_stationary(mechanism, out, value, at, branch, steps: int = 4):
+def _polish_stationary(
+    mechanism: Mechanism,
+    out: Callable[[Motion], Array],
+    value: Array,
+    at: Array,
+    branch: Array,
+    steps: int = 4,
+) -> tuple[Array, Array]:
     """Newton on output′ = 0 with the analytic output″, from a golden-section estimate.
 
     A maximum's *value* is exact after golden section, but its *location* only to √eps (the
@@ -302,7 +331,8 @@ def _polish_stationary(mechanism, out, value, at, branch, steps: int = 4):
 def stroke(sc: SliderCrank) -> Array:
     """Slider stroke (exact), the distance between the slider's two extreme positions."""
     ext = output_extremes(sc)
-    return ext["max"] - ext["min"]
+    travel: Array = ext["max"] - ext["min"]
+    return travel
 
 
 def _crank_rotation_between(t_a: Array, t_b: Array, through: Array) -> Array:
@@ -313,7 +343,7 @@ def _crank_rotation_between(t_a: Array, t_b: Array, through: Array) -> Array:
 
 
 def coefficients(
-    mechanism: Mechanism, *, extremes: dict[str, Array] | None = None
+    mechanism: Mechanism, *, extremes: dict[str, NDArray[Any]] | None = None
 ) -> dict[str, Array]:
     """Paper 003's kinematic coefficients, as exact maxima over the cycle.
 
@@ -322,7 +352,7 @@ def coefficients(
 
         Kω = max|φ3′|·φΨ/Ψ,  Kε = max|φ3″|·φΨ²/Ψ,  Kp = max|φ3′·φ3″|·φΨ³/Ψ²
 
-    Double crank (both turn): Kω = max|φ3′|, Kε = 2π·max|φ3″|, Kp = 2π·max|φ3′·φ3″|,
+    Double crank (both turn): Kω = max |φ3′|, Kε = 2π·max |φ3″|, Kp = 2π·max |φ3′·φ3″|,
     δ = max φ3′ − min φ3′ (paper 003 eqs. 3–4 and the text after eq. 7). A slider-crank whose
     crank turns gets the crank-rocker formulas with the stroke in place of Ψ (Levitskii's cam
     coefficients, which these generalise). Where the input cannot turn fully, all are NaN.
@@ -344,7 +374,10 @@ def coefficients(
     {'K_omega': 1.2742, 'K_epsilon': 2.9666, 'K_p': 3.1078, 'delta': 0.538}
     """
     spherical = isinstance(mechanism, SphericalFourBar)
-    arcs = _sph.input_limits(mechanism) if spherical else input_range(mechanism)
+    if isinstance(mechanism, SphericalFourBar):
+        arcs = _sph.input_limits(mechanism)
+    else:
+        arcs = input_range(mechanism)
     motion = circuit(mechanism, CIRCUIT_SAMPLES)
     ext = output_extremes(mechanism, motion=motion) if extremes is None else extremes
 
@@ -358,7 +391,7 @@ def coefficients(
         r1, r2 = output_rates(mechanism, m)
         return r1 * r2
 
-    def absmax(q) -> Array:
+    def absmax(q: Callable[[Motion], Array]) -> Array:
         return np.abs(circuit_extremum(mechanism, lambda m: np.abs(q(m)), motion=motion)[0])
 
     w_max, e_max, p_max = absmax(rate1), absmax(rate2), absmax(power)
@@ -369,7 +402,7 @@ def coefficients(
     elif isinstance(mechanism, FourBar):
         through = mechanism.frame_angle
     else:
-        through = mechanism.line_angle
+        through = _slider(mechanism).line_angle
     phi_psi = _crank_rotation_between(ext["min_at"], ext["max_at"], np.asarray(through))
     psi = ext["max"] - ext["min"]
     rocking = arcs.full & ~ext["turns"]

@@ -20,12 +20,14 @@ range are closed forms. Every function broadcasts over the mechanism's batch sha
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.analysis.extrema import CIRCUIT_SAMPLES, circuit_extremum
 from linkwright.engine import InputArcs, Motion
-from linkwright.engine.circuits import _normalised
+from linkwright.engine.circuits import normalised_arcs
 from linkwright.geometry import sphere
 from linkwright.mechanisms import SphericalFourBar, circuit, solve
 
@@ -34,6 +36,7 @@ __all__ = [
     "NotASphericalFourBar",
     "balanced_mu",
     "grashof_terms",
+    "hinge_ratio",
     "input_limits",
     "output_extremes",
     "output_limits",
@@ -75,7 +78,7 @@ def _alphas(fb: SphericalFourBar) -> tuple[Array, Array, Array, Array]:
     return tuple(np.broadcast_arrays(fb.crank, fb.coupler, fb.rocker, fb.frame))  # type: ignore[return-value]
 
 
-def _mu(fb: SphericalFourBar, mu: ArrayLike) -> Array:
+def hinge_ratio(fb: SphericalFourBar, mu: ArrayLike) -> Array:
     value = np.asarray(mu, dtype=float)
     if not np.all(np.isfinite(value) & (value > 0)):
         bad = value[~(np.isfinite(value) & (value > 0))].ravel()[:3].tolist()
@@ -188,7 +191,7 @@ def _arcs_from(s_hi: Array, c_lo: Array, flip: bool) -> InputArcs:
         lo, hi = np.pi - hi, np.pi - lo
     zero = np.zeros(lo.shape, dtype=np.int64)
     # The engine's own normalisation, so that these arcs compare one-to-one with input_range's.
-    return _normalised(full, never, lo, hi, zero, zero)
+    return normalised_arcs(full, never, lo, hi, zero, zero)
 
 
 def input_limits(fb: SphericalFourBar) -> InputArcs:
@@ -270,7 +273,9 @@ def _input_at_output(fb: SphericalFourBar, phi3: Array) -> Array:
     return np.arctan2(a[..., 2], a[..., 1])
 
 
-def output_extremes(fb: SphericalFourBar, *, motion: Motion | None = None) -> dict[str, Array]:
+def output_extremes(
+    fb: SphericalFourBar, *, motion: Motion | None = None
+) -> dict[str, NDArray[Any]]:
     """Exact extremes of the output φ3 over the circuit and the inputs where they occur.
 
     The circuit's output sweeps the whole arc of :func:`output_limits` that contains it (its
@@ -429,7 +434,7 @@ def pressure_angles(fb: SphericalFourBar, motion: Motion, mu: ArrayLike) -> dict
     >>> np.degrees(nu["normal"]).round(2), np.degrees(nu["tangential"]).round(2)
     (array([-11.25,  23.73]), array([ 3.18, -3.2 ]))
     """
-    m = _mu(fb, mu)[..., None]
+    m = hinge_ratio(fb, mu)[..., None]
     p = motion.positions
     a, b = p["A"], p["B"]
     b0 = np.broadcast_to(p["B0"], b.shape)
@@ -461,7 +466,7 @@ def pressure_extremes(
     ...  for k in ("normal_max", "normal_min", "tangential_max", "tangential_min")]
     [23.731, -11.254, 3.176, -3.196]
     """
-    _mu(fb, mu)
+    hinge_ratio(fb, mu)
     if motion is None:
         motion = circuit(fb, CIRCUIT_SAMPLES)
     out: dict[str, Array] = {}
@@ -500,7 +505,7 @@ def paper003_normal_extremes(fb: SphericalFourBar, mu: ArrayLike) -> dict[str, A
     (23.731, -11.254)
     """
     a1, a2, a3, a4 = _alphas(fb)
-    m = _mu(fb, mu)
+    m = hinge_ratio(fb, mu)
     chord = np.sqrt(1.0 + m * m - 2.0 * m * np.cos(a2))
     base = m * np.cos(a3) - np.cos(a1) * np.cos(a4)
     swing = np.sin(a1) * np.sin(a4)
@@ -553,7 +558,7 @@ def paper003_tangential_extremes(fb: SphericalFourBar, mu: ArrayLike) -> dict[st
     [60.6353, 60.794, 59.4884, 90.0]
     """
     a1, a2, a3, a4 = _alphas(fb)
-    m_ = _mu(fb, mu)
+    m_ = hinge_ratio(fb, mu)
     chord2 = 1.0 + m_ * m_ - 2.0 * m_ * np.cos(a2)
 
     def eq1(cos_d: Array) -> Array:
@@ -561,7 +566,8 @@ def paper003_tangential_extremes(fb: SphericalFourBar, mu: ArrayLike) -> dict[st
         # where the force runs along the output axis (den = 0, ν_τ = 0 as in pressure_angles).
         num = m_ * np.sin(a3) ** 2 - np.cos(a2) + np.cos(a3) * cos_d
         den2 = np.sin(a3) ** 2 * (chord2 - (m_ * np.cos(a3) - cos_d) ** 2)
-        return np.arctan2(num, np.sqrt(np.clip(den2 - num**2, 0.0, None)))
+        nu: Array = np.arctan2(num, np.sqrt(np.clip(den2 - num**2, 0.0, None)))
+        return nu
 
     s1 = np.sin(a1)
     R = m_ * np.sin(a3) / s1

@@ -172,9 +172,10 @@ def _on_dask(
     try:
         from dask.distributed import Client, LocalCluster, as_completed
     except ImportError:
+        from linkwright._extras import hint
+
         raise AtlasBuildError(
-            "a Dask build needs dask[distributed] (pip install 'dask[distributed]'); "
-            "--workers 0 builds in this process"
+            hint("atlas", "a Dask build") + "; --workers 0 builds in this process"
         ) from None
     # Dask's nannies set OMP_NUM_THREADS=1 (and the like) in this process's environment before
     # they spawn workers, and leave it: FAISS's BLAS, loaded afterwards for the index, would

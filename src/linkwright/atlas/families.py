@@ -71,6 +71,7 @@ from linkwright.curves import (
     sphere_descriptor_variants,
     sphere_descriptors,
 )
+from linkwright.engine import compile as compiled_plans
 from linkwright.engine import kernels
 from linkwright.mechanisms import FAMILIES as REGISTERED
 from linkwright.mechanisms import Mechanism, solve
@@ -206,7 +207,8 @@ def _fivebar_margin(shape: Mapping[str, Array], samples: int = _CHECK_SAMPLES) -
     dy = c["crank2"] * np.sin(phi) - c["crank1"] * np.sin(theta)
     d2 = dx * dx + dy * dy
     lo, hi = (c["link1"] - c["link2"]) ** 2, (c["link1"] + c["link2"]) ** 2
-    return np.min(np.minimum(hi - d2, d2 - lo), axis=-1) / hi[:, 0]
+    margin: Array = np.min(np.minimum(hi - d2, d2 - lo), axis=-1) / hi[:, 0]
+    return margin
 
 
 def _turns_fully(family: str, shape: Mapping[str, Array]) -> NDArray[np.bool_]:
@@ -284,6 +286,9 @@ def curves(
         code = p.pop(CODE)
         turns = model.turns  # type: ignore[union-attr]
         theta = np.linspace(0.0, 2.0 * np.pi * turns, samples, endpoint=False)
+        if not model.triads and compiled_plans.available():  # type: ignore[union-attr]
+            # The traced point alone through the plan's compiled kernel (same numbers).
+            return _compiled_curve(model.local(p, code), model.traced, theta)
         return model.evaluate(p, code, theta, around=False)[0]  # type: ignore[union-attr]
     p = {k: np.atleast_1d(np.asarray(params[k], dtype=float)) for k in PARAMS[family]}
     theta = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
@@ -295,9 +300,21 @@ def curves(
         return kernels.fourbar_coupler_points(a0, b0, *args, theta)
     if family == "spherical-fourbar" and kernels.available():
         names = ("frame", "crank", "coupler", "rocker", "point_arc", "point_angle", "assembly")
-        return kernels.spherical_fourbar_coupler_points(*(p[k] for k in names), theta)
+        frame, crank, coupler, rocker, arc, angle, assembly = (p[k] for k in names)
+        return kernels.spherical_fourbar_coupler_points(
+            frame, crank, coupler, rocker, arc, angle, assembly, theta
+        )
     mech = MODELS[family].local(p, p["assembly"])
+    if compiled_plans.available():
+        return _compiled_curve(mech, "P", theta)
     return solve(mech, theta, order=0).positions["P"]
+
+
+def _compiled_curve(mech: Mechanism, joint: str, theta: Array) -> Array:
+    """``solve(mech, theta, order=0).positions[joint]``, computed by the compiled plan, which
+    writes that joint's positions only (NaN where the design does not assemble)."""
+    plan = compiled_plans.compiled_plan(mech.plan)
+    return plan.positions(mech.params(), theta, (joint,), points=mech.points)[joint]
 
 
 def describe(
@@ -368,7 +385,9 @@ def _draw_generic(model: GenericModel, rng: np.random.Generator, n: int) -> dict
     return out
 
 
-def _generic_turns_fully(model: GenericModel, draw: Mapping[str, Array], samples: int):
+def _generic_turns_fully(
+    model: GenericModel, draw: Mapping[str, Array], samples: int
+) -> NDArray[np.bool_]:
     """Which draws assemble at every sample of a turn on their configuration, every closure
     margin at least MARGIN, and (followed through a triad) end the turn where they began."""
     shape = {k: v for k, v in draw.items() if k != CODE}
@@ -385,7 +404,7 @@ def _generic_turns_fully(model: GenericModel, draw: Mapping[str, Array], samples
         size = max(float(np.nanmax(np.abs(p))) for p in motion.positions.values())
         for p in motion.positions.values():
             ok &= np.all(np.abs(p[:, 0] - p[:, -1]) <= 1e-7 * max(size, 1.0), axis=-1)
-    return ok
+    return np.asarray(ok)
 
 
 def _sample_generic(model: GenericModel, rng: np.random.Generator, count: int) -> dict[str, Array]:

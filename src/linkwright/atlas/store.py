@@ -183,7 +183,8 @@ def write_json(path: Path, value: Mapping[str, Any]) -> None:
 
 def read_json(path: Path) -> dict[str, Any]:
     try:
-        return json.loads(Path(path).read_text())
+        data: dict[str, Any] = json.loads(Path(path).read_text())
+        return data
     except FileNotFoundError:
         raise AtlasStoreError(f"{path}: not found") from None
     except (OSError, ValueError) as exc:
@@ -253,7 +254,8 @@ def read_shard(directory: Path, index: int, mmap: bool = True) -> np.ndarray:
     """Shard ``index`` as its structured array (memory-mapped unless ``mmap`` is false)."""
     path = Path(directory) / shard_name(index)
     try:
-        return np.load(path, mmap_mode="r" if mmap else None, allow_pickle=False)
+        table: np.ndarray = np.load(path, mmap_mode="r" if mmap else None, allow_pickle=False)
+        return table
     except FileNotFoundError:
         raise AtlasStoreError(f"{path}: missing shard (rebuild or resume the atlas)") from None
 

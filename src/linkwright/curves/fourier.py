@@ -55,9 +55,16 @@ __all__ = [
     "CurveError",
     "align",
     "aligned_error",
+    "circular_correlation",
+    "closed_choice",
+    "closed_phases",
     "descriptor_variants",
     "descriptors",
+    "locate",
+    "refine_shift",
     "resample",
+    "shifted_samples",
+    "start_fraction",
 ]
 
 Array = NDArray[np.float64]
@@ -111,7 +118,7 @@ def resample(points: ArrayLike, samples: int = DEFAULT_SAMPLES, closed: bool = T
     if closed:
         p = np.concatenate([p, p[:, :1]], axis=1)
     seg = np.hypot(*np.moveaxis(np.diff(p, axis=1), -1, 0))
-    idx, w, bad = _locate(seg, samples, closed)
+    idx, w, bad = locate(seg, samples, closed)
     a = np.take_along_axis(p, idx[..., None], axis=1)
     b = np.take_along_axis(p, idx[..., None] + 1, axis=1)
     out = a + w[..., None] * (b - a)
@@ -119,7 +126,7 @@ def resample(points: ArrayLike, samples: int = DEFAULT_SAMPLES, closed: bool = T
     return out.reshape(batch + (samples, 2))
 
 
-def _locate(seg: Array, samples: int, closed: bool) -> tuple[Array, Array, Array]:
+def locate(seg: Array, samples: int, closed: bool) -> tuple[Array, Array, Array]:
     """Where ``samples`` points equally spaced by length fall on polylines with segment
     lengths ``seg`` (C, S): the segment (C, samples), the fraction of it, and which rows have
     no length (a NaN, or all points equal)."""
@@ -176,7 +183,7 @@ def _fourier(points: ArrayLike, harmonics: int, closed: bool) -> Array:
     return out
 
 
-def _closed_phases(pos: Array, neg: Array) -> tuple[Array, Array]:
+def closed_phases(pos: Array, neg: Array) -> tuple[Array, Array]:
     """The rotation φ and start shift σ (…, 4) of the four normalisations of a closed curve's
     coefficients ``pos`` = Z_1 …, ``neg`` = Z_−1 … (… , K): variants 0, 1 run forwards, 2, 3
     backwards (Z_n and Z_−n swapped); variant v's Z_k is then multiplied by e^{i(φ_v + k·σ_v)},
@@ -207,7 +214,7 @@ def _normalised(coeffs: Array, harmonics: int, closed: bool) -> Array:
     forward = np.concatenate([pos, neg], axis=-1)
     backward = np.concatenate([neg, pos], axis=-1)
     z = np.stack([forward, forward, backward, backward], axis=-2)
-    phi, shift = _closed_phases(pos, neg)
+    phi, shift = closed_phases(pos, neg)
     k = np.concatenate([n, -n])
     return z * np.exp(1j * (phi[..., None] + k * shift[..., None]))
 
@@ -462,15 +469,12 @@ def _descriptors_reference(
     """:func:`descriptors` in NumPy, from the variants: the reference the compiled kernel is
     tested against, and the path without numba."""
     v = descriptor_variants(points, closed=closed, harmonics=harmonics)
-    if closed:
-        choice = _closed_choice(v, harmonics)
-    else:
-        # Either end first: the one whose Z_2 has the larger real part.
-        choice = np.where(v[..., 0, 1] >= v[..., 1, 1], 0, 1)
+    # An open curve may start at either end: the one whose Z_2 has the larger real part.
+    choice = closed_choice(v, harmonics) if closed else np.where(v[..., 0, 1] >= v[..., 1, 1], 0, 1)
     return np.take_along_axis(v, choice[..., None, None], axis=-2)[..., 0, :]
 
 
-def _closed_choice(v: Array, k: int) -> Array:
+def closed_choice(v: Array, k: int) -> Array:
     """Which of the four closed-curve variants (…, 4, D) is canonical (…,): their first 4K
     entries are Re Z_1 … Z_K, Re Z_−1 … Z_−K, then the imaginary parts, as
     :func:`descriptor_variants` lays them out."""
@@ -492,7 +496,7 @@ def _closed_choice(v: Array, k: int) -> Array:
     return pair + flip
 
 
-def _refine_shift(evaluate: Callable[[Array], tuple[Array, Array]], whole: Array) -> Array:
+def refine_shift(evaluate: Callable[[Array], tuple[Array, Array]], whole: Array) -> Array:
     """The shift near ``whole`` (the best whole shift) that maximises a smooth objective, given
     ``evaluate(shift) -> (objective, slope)``, both batched.
 
@@ -534,7 +538,7 @@ def _refine_shift(evaluate: Callable[[Array], tuple[Array, Array]], whole: Array
     return np.where(f_best >= f_whole, best, whole)
 
 
-def _correlation(spectrum: Array, shift: Array) -> tuple[Array, Array]:
+def circular_correlation(spectrum: Array, shift: Array) -> tuple[Array, Array]:
     """c(s) = (1/M) Σ_n spectrum_n e^{2πi f_n s/M} (f_n the FFT's frequencies) and dc/ds, the
     band-limited correlation between samples, for ``spectrum`` (…, C, M) (C correlations
     sharing a shift) and ``shift`` (…): each (…, C)."""
@@ -546,7 +550,7 @@ def _correlation(spectrum: Array, shift: Array) -> tuple[Array, Array]:
     return out[..., 0], out[..., 1]
 
 
-def _shifted(x: Array, shift: Array, axis: int) -> Array:
+def shifted_samples(x: Array, shift: Array, axis: int) -> Array:
     """The samples of x(t − shift), band-limited between samples (x complex, or real and then
     the real part), over the sample axis ``axis`` (negative: counted from the end); ``shift``
     has the batch shape."""
@@ -564,14 +568,14 @@ def _best_correlation(spectrum: Array) -> tuple[Array, Array]:
     whole = np.argmax(np.abs(np.fft.ifft(spectrum, axis=-1)), axis=-1).astype(float)
 
     def evaluate(shift: Array) -> tuple[Array, Array]:
-        c, dc = _correlation(spectrum[..., None, :], shift)
+        c, dc = circular_correlation(spectrum[..., None, :], shift)
         return np.abs(c[..., 0]) ** 2, 2.0 * np.real(np.conj(c[..., 0]) * dc[..., 0])
 
-    shift = _refine_shift(evaluate, whole)
-    return shift, _correlation(spectrum[..., None, :], shift)[0][..., 0]
+    shift = refine_shift(evaluate, whole)
+    return shift, circular_correlation(spectrum[..., None, :], shift)[0][..., 0]
 
 
-def _start_fraction(forwards: Array, backwards: Array, reverse: Array, samples: int) -> Array:
+def start_fraction(forwards: Array, backwards: Array, reverse: Array, samples: int) -> Array:
     """Where on the curve the target's first point lands, as a fraction of the curve's length
     from its first point along its own direction, given the best shifts (in samples) of the
     curve run forwards and backwards and which won."""
@@ -616,7 +620,7 @@ def align(
 
     For a start shift s (in samples) of the centred curve a the best transform is the complex
     least-squares fit w·a + c ≈ b, w = scale·e^{i·rotation}: w = ⟨a, b⟩_s/‖a‖² and
-    c = mean(b) − w·mean(a), with residual ‖b − mean(b)‖² − |⟨a, b⟩_s|²/‖a‖². The correlation
+    c = mean(b) − w·mean(a), with residual ‖b − mean(b)‖² − abs(⟨a, b⟩_s)²/‖a‖². The correlation
     ⟨a, b⟩_s at every whole shift comes from one FFT; the best is then refined between samples
     on the band-limited correlation, so a start point between two samples costs only the
     resampling's own O(1/samples²). Open curves (``closed=False``) keep their ends: only the
@@ -670,14 +674,14 @@ def align(
     backwards = gain_b > gain_f  # NaN compares False: a NaN curve stays "forwards"
     w = np.where(backwards, w_b, w_f)
     if closed:
-        shift = _start_fraction(s_f, s_b, backwards, samples)
+        shift = start_fraction(s_f, s_b, backwards, samples)
     else:
         shift = np.where(backwards, 1.0, 0.0)
     # The residual ‖b‖² − |⟨a, b⟩|²/‖a‖² cancels to √ε of the size on a near-perfect fit: the
     # transformed curve's distance to the target is summed instead.
     d = np.where(backwards[..., None], reversed_a, a) - mean_a[..., None]
     if closed:
-        d = _shifted(d, np.where(backwards, s_b, s_f), axis=-1)
+        d = shifted_samples(d, np.where(backwards, s_b, s_f), axis=-1)
     residual = np.sum(np.abs(w[..., None] * d - bc) ** 2, axis=-1)
     with np.errstate(invalid="ignore", divide="ignore"):
         error = np.sqrt(residual / nb)

@@ -73,13 +73,13 @@ from linkwright.curves.fourier import (
     DEFAULT_HARMONICS,
     DEFAULT_SAMPLES,
     CurveError,
-    _closed_choice,
-    _closed_phases,
-    _correlation,
-    _locate,
-    _refine_shift,
-    _shifted,
-    _start_fraction,
+    circular_correlation,
+    closed_choice,
+    closed_phases,
+    locate,
+    refine_shift,
+    shifted_samples,
+    start_fraction,
 )
 from linkwright.engine.kernels import available, compiled
 
@@ -170,7 +170,7 @@ def sphere_resample(
     if closed:
         p = np.concatenate([p, p[:, :1]], axis=1)
     theta, _, _ = _arcs(p[:, :-1], p[:, 1:])
-    idx, w, bad = _locate(theta, samples, closed)
+    idx, w, bad = locate(theta, samples, closed)
     a = np.take_along_axis(p, idx[..., None], axis=1)
     b = np.take_along_axis(p, idx[..., None] + 1, axis=1)
     along = w * np.take_along_axis(theta, idx, axis=1)
@@ -392,7 +392,7 @@ def _pole_variants(frames: Array, mean: Array, coeffs: Array, k: int) -> Array:
     pos = x[..., 0] + 1j * x[..., 1]  # Z_n
     neg = np.conj(x[..., 0]) + 1j * np.conj(x[..., 1])  # Z_−n = conj(X_n)·e₁ + i conj(X_n)·e₂
     height = x[..., 2]
-    phi, shift = _closed_phases(pos, neg)  # (…, 4)
+    phi, shift = closed_phases(pos, neg)  # (…, 4)
     turn = np.exp(1j * phi)[..., None]
     # e^{inσ}, n = 1 … K, by products: one exponential per variant, not one per harmonic.
     start = np.cumprod(np.broadcast_to(np.exp(1j * shift)[..., None], phi.shape + (k,)), -1)
@@ -419,7 +419,7 @@ def _sphere_variants(p: Array, harmonics: int, canonical: bool) -> Array:
     if canonical:
         pole = np.take_along_axis(poles, choice[:, None, None], axis=1)[:, 0]
         v = _pole_variants(_frames(pole), mean, coeffs, harmonics)  # (C, 4, D)
-        pick = _closed_choice(v, harmonics)
+        pick = closed_choice(v, harmonics)
         v = np.take_along_axis(v, pick[:, None, None], axis=1)[:, 0]
         v[~np.isfinite(v).all(axis=-1)] = np.nan
         return v
@@ -543,7 +543,7 @@ def sphere_align(curve: ArrayLike, target: ArrayLike, *, samples: int = 256) -> 
     curve ``curve`` (…, N, 3) onto ``target`` (…, N′, 3), both resampled at ``samples`` points
     by arc length (:func:`sphere_resample`); batch shapes broadcast.
 
-    For a start shift, the best rotation R minimises Σ_t |R·a_t − b_t|² (Wahba's problem): with
+    For a start shift, the best rotation R minimises Σ_t ‖R·a_t − b_t‖² (Wahba's problem): with
     H = Σ_t a_t b_tᵀ = U Σ Vᵀ, R = V diag(1, 1, ±1) Uᵀ, the sign making det R = +1 (Kabsch),
     and the residual is Σ|a|² + Σ|b|² − 2 tr(R H). H at every whole shift comes from nine
     FFT correlations; the best shift is refined between samples on the band-limited H (the
@@ -590,21 +590,21 @@ def sphere_align(curve: ArrayLike, target: ArrayLike, *, samples: int = 256) -> 
         whole = np.argmax(_kabsch(whole_h)[0], axis=-1).astype(float)
 
         def evaluate(s: Array, spectrum: Array = spectrum) -> tuple[Array, Array]:
-            h, dh = _correlation(spectrum, s)
+            h, dh = circular_correlation(spectrum, s)
             value, r = _kabsch(h.real.reshape(h.shape[:-1] + (3, 3)))
             return value, np.einsum("...ij,...ji->...", r, dh.real.reshape(r.shape))
 
-        s = _refine_shift(evaluate, whole)
-        h = _correlation(spectrum, s)[0].real
+        s = refine_shift(evaluate, whole)
+        h = circular_correlation(spectrum, s)[0].real
         value, r = _kabsch(h.reshape(h.shape[:-1] + (3, 3)))
         fits.append((value, r, s))
     (v_f, r_f, s_f), (v_b, r_b, s_b) = fits
     backwards = v_b > v_f  # NaN compares False: a NaN curve stays "forwards"
     rotation = np.where(backwards[..., None, None], r_b, r_f)
-    shift = _start_fraction(s_f, s_b, backwards, samples)
+    shift = start_fraction(s_f, s_b, backwards, samples)
     # Σ|a|² + Σ|b|² − 2 tr(R H) cancels to √ε on a near-perfect fit: the turned curve's chord
     # distance to the target is summed instead.
-    x = _shifted(
+    x = shifted_samples(
         np.where(backwards[..., None, None], reversed_a, a), np.where(backwards, s_b, s_f), axis=-2
     )
     residual = np.sum((x @ np.swapaxes(rotation, -1, -2) - b) ** 2, axis=(-2, -1))

@@ -27,17 +27,74 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import crossings
 from linkwright.engine.arcs import TWO_PI, InputArcs
-from linkwright.engine.continuation import arcs_of, every_circuit
+from linkwright.engine.continuation import Memo, arcs_of, circuit_arcs, every_circuit, memo_key
 from linkwright.engine.crossings import LIMIT, PLAIN
 from linkwright.engine.evaluate import Motion, batch_shape, evaluate, place_all
 from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, SphereCrank
 from linkwright.geometry import plane
 
-__all__ = ["InputArcs", "NoPeriod", "input_arcs", "input_turns", "trace"]
+__all__ = [
+    "InputArcs",
+    "NoPeriod",
+    "input_arcs",
+    "input_turns",
+    "normalised_arcs",
+    "trace",
+]
 
 Array = NDArray[np.float64]
 GRID = 1440
 BISECTIONS = 64
+# Bisection steps taken per evaluation, where the batch is small: the 2^L − 1 midpoints the
+# next L steps can visit are evaluated in one call (a call costs far more than a sample), and
+# the steps are then taken as one at a time would take them, bit for bit.
+TREE_LEVELS = 6
+TREE_NUMBERS = 1024
+
+
+def _bisect(a: Array, b: Array, go_right, steps: int = BISECTIONS) -> tuple[Array, Array]:
+    """``steps`` bisections of the brackets ``[a, b]``: at each, ``mid = (a + b)/2`` replaces
+    ``a`` where ``go_right(mid)`` holds, else ``b``. ``go_right`` takes midpoints with one more
+    axis (the candidates of every bracket) and answers for each."""
+    levels = 1
+    while levels < TREE_LEVELS and max(a.size, 1) * (2 ** (levels + 1) - 1) <= TREE_NUMBERS:
+        levels += 1
+    done = 0
+    while done < steps:
+        depth = min(levels, steps - done)
+        # Every bracket the next `depth` steps can reach, level by level; a node's children are
+        # its left half (2i) and its right half (2i + 1).
+        lo, hi = a[..., None], b[..., None]
+        mids = []
+        for _ in range(depth):
+            m = 0.5 * (lo + hi)
+            mids.append(m)
+            lo = np.stack((lo, m), -1).reshape(m.shape[:-1] + (2 * m.shape[-1],))
+            hi = np.stack((m, hi), -1).reshape(lo.shape)
+        right = go_right(np.concatenate(mids, -1))
+        node = np.zeros(a.shape, dtype=np.int64)
+        offset = 0
+        for d, m in enumerate(mids):
+            mid = np.take_along_axis(m, node[..., None], -1)[..., 0]
+            r = np.take_along_axis(right[..., offset : offset + 2**d], node[..., None], -1)[..., 0]
+            a = np.where(r, mid, a)
+            b = np.where(r, b, mid)
+            node = 2 * node + r
+            offset += 2**d
+        done += depth
+        # Brackets down to adjacent floats (or NaN): every later midpoint is one of the two
+        # ends, so the side of each end, asked once, decides all the remaining steps.
+        mid = 0.5 * (a + b)
+        if done < steps and np.all((mid == a) | (mid == b) | np.isnan(mid)):
+            ends = go_right(np.stack((a, b), -1))
+            lo, at_lo, at_hi = a, ends[..., 0], ends[..., 1]
+            for _ in range(steps - done):
+                mid = 0.5 * (a + b)
+                r = np.where(mid == lo, at_lo, at_hi)
+                a = np.where(r, mid, a)
+                b = np.where(r, b, mid)
+            break
+    return a, b
 
 
 def _is_ground(plan: Plan, name: str) -> bool:
@@ -169,14 +226,14 @@ def _analytic_arcs(plan: Plan, params, points) -> InputArcs:
     lo[..., 1] = np.where(two, psi - a_in - width, np.nan)
     hi[..., 1] = np.where(two, psi - a_in, np.nan)
     zero = np.zeros(lo.shape, dtype=np.int64)
-    arcs = _normalised(full, never, lo, hi, zero, zero)
+    arcs = normalised_arcs(full, never, lo, hi, zero, zero)
     # Snap after normalising (a shift by 2π rounds, and the snapped value is the one returned);
     # a start snapped past π is wrapped by normalising again, and snapped again.
     for _ in range(2):
         lo, hi = _snap_inside(plan, params, points, arcs.lo, arcs.hi)
         if not np.any(lo > np.pi):
             return replace(arcs, lo=lo, hi=hi)
-        arcs = _normalised(full, never, lo, hi, arcs.dyad_lo, arcs.dyad_hi)
+        arcs = normalised_arcs(full, never, lo, hi, arcs.dyad_lo, arcs.dyad_hi)
     return arcs
 
 
@@ -217,7 +274,7 @@ def _snap_inside(plan: Plan, params, points, lo: Array, hi: Array) -> tuple[Arra
     return theta[..., :k], theta[..., k:]
 
 
-def _normalised(full, never, lo, hi, dyad_lo, dyad_hi, period=TWO_PI) -> InputArcs:
+def normalised_arcs(full, never, lo, hi, dyad_lo, dyad_hi, period=TWO_PI) -> InputArcs:
     """Put each arc's start in (−π, −π + period] and order arcs by start; padding last."""
     period = np.asarray(period, dtype=float)
     t = period[..., None] if period.ndim else period
@@ -300,14 +357,15 @@ def _numeric_arcs(plan, params, points, branches, grid: int = GRID, turns=None) 
     # node (a joint passing exactly through a pivot) would fall outside its own bracket.
     b = np.take_along_axis(np.broadcast_to(theta_next, shape + (nodes,)), idx, -1)
     entering = ~np.take_along_axis(ok, idx, -1)  # invalid → valid going up
-    for _ in range(BISECTIONS):
-        mid = 0.5 * (a + b)
-        ok_mid, _ = _assembled(plan, params, points, mid, _expand(branches, mid.shape))
-        ok_mid = np.broadcast_to(ok_mid, mid.shape)
+
+    def go_right(mid: Array) -> NDArray[np.bool_]:
+        flat = mid.reshape(mid.shape[:-2] + (-1,))
+        ok_mid, _ = _assembled(plan, params, points, flat, _expand(branches, flat.shape))
+        ok_mid = np.broadcast_to(ok_mid, flat.shape).reshape(mid.shape)
         # Keep the bracket [a, b] with a on the entering side's invalid end.
-        go_right = np.where(entering, ~ok_mid, ok_mid)
-        a = np.where(go_right, mid, a)
-        b = np.where(go_right, b, mid)
+        return np.where(entering[..., None], ~ok_mid, ok_mid)
+
+    a, b = _bisect(a, b, go_right)
     boundary = np.where(entering, b, a)  # the assembled end of the bracket
     _, margins = _assembled(plan, params, points, boundary, _expand(branches, boundary.shape))
     which = np.argmin(margins, axis=-1)
@@ -328,12 +386,12 @@ def _numeric_arcs(plan, params, points, branches, grid: int = GRID, turns=None) 
         end = np.where(end > lo[..., i], end, end + period)
         hi[..., i] = np.where(np.isfinite(lo[..., i]), end, np.nan)
         dyad_hi[..., i] = np.take_along_axis(which, j[..., None], -1)[..., 0]
-    arcs = _normalised(full, never, lo, hi, np.where(has & entering, which, -1), dyad_hi, per)
+    arcs = normalised_arcs(full, never, lo, hi, np.where(has & entering, which, -1), dyad_hi, per)
     # An end moved by a period (or normalised) is rounded, and where the margin is steep (a
     # spherical linkage with A a hair from B0) an ulp can put it outside: snap it back in.
     lo, hi = _snap_inside(plan, params, points, arcs.lo, arcs.hi)
     if np.any(lo > -np.pi + (period[..., None] if np.ndim(period) else period)):
-        arcs = _normalised(full, never, lo, hi, arcs.dyad_lo, arcs.dyad_hi, per)
+        arcs = normalised_arcs(full, never, lo, hi, arcs.dyad_lo, arcs.dyad_hi, per)
         lo, hi = _snap_inside(plan, params, points, arcs.lo, arcs.hi)
     return replace(arcs, lo=lo, hi=hi)
 
@@ -417,15 +475,36 @@ def input_arcs(
     applies). Tests compare the two. The arcs cover one period of the input
     (:func:`input_turns`): several turns for a linkage geared at a fractional ratio.
     """
+    arcs = ARCS_MEMO.get(
+        memo_key(plan, params, points, "arcs", method),
+        lambda: search_input_arcs(plan, params, points, method),
+    )
+    # Kept arcs are shared: each caller gets arrays of its own.
+    return InputArcs(
+        *(np.copy(getattr(arcs, f)) for f in ("full", "never", "lo", "hi", "dyad_lo", "dyad_hi")),
+        period=np.copy(arcs.period) if isinstance(arcs.period, np.ndarray) else arcs.period,
+    )
+
+
+ARCS_MEMO = Memo()
+SAMPLED_MEMO = Memo()
+
+
+def search_input_arcs(plan: Plan, params, points: frozenset[str], method: str) -> InputArcs:
     dyads = plan.dyads
     turns = input_turns(plan, params, points=points)
     if plan.triads:
         # A triad's poses are followed from sample to sample, not held: the arcs of every
         # circuit of every configuration (one linkage at a time).
-        found = every_circuit(
-            plan, params, 90, points=points, order=0, period=TWO_PI * float(np.max(turns))
+        arcs = circuit_arcs(
+            plan,
+            params,
+            90,
+            points=points,
+            period=TWO_PI * float(np.max(turns)),
+            shape=batch_shape(params, points),
         )
-        return replace(arcs_of(found, batch_shape(params, points)), period=TWO_PI * turns)
+        return replace(arcs, period=TWO_PI * turns)
     if not dyads:
         shape = batch_shape(params, points)
         nanpad = np.full(shape + (1,), np.nan)
@@ -458,6 +537,9 @@ def input_arcs(
 
 MAX_SEGMENTS = 32
 SCAN_CHUNK = 240
+# A small batch scans in longer chunks (a call costs about as much as 300 samples of a six-bar
+# on the sphere): up to this many samples a call.
+SCAN_NUMBERS = 2880
 SPACINGS = ("input", "path")
 
 
@@ -610,6 +692,31 @@ def trace(
         raise ValueError(
             f"spacing must be one of {', '.join(map(repr, SPACINGS))}, got {spacing!r}"
         )
+    # Where the samples lie does not depend on the order asked for: a scene's drawing (order 0)
+    # and its diagrams (order 2) share them.
+    theta, branches, on = SAMPLED_MEMO.get(
+        memo_key(plan, params, points, "trace", samples, circuit, float(start), spacing),
+        lambda: sample_circuit(plan, params, points, samples, circuit, start, spacing),
+    )
+    motion = evaluate(
+        plan,
+        params,
+        theta.copy(),
+        points=points,
+        branches={k: v.copy() for k, v in branches.items()} or None,
+        order=order,
+        crossings=on,
+    )
+    keep = np.isfinite(theta)
+    if keep.all():
+        return motion
+    return _restrict(motion, keep)
+
+
+def sample_circuit(
+    plan: Plan, params, points: frozenset[str], samples: int, circuit: int, start: float, spacing
+) -> tuple[Array, dict[str, Array], dict[str, NDArray[np.bool_]]]:
+    """The inputs of :func:`trace`'s samples, each dyad's branch at each and the crossings."""
     arcs = input_arcs(plan, params, points=points)
     shape = arcs.full.shape
     period = np.broadcast_to(np.asarray(arcs.period, dtype=float), shape)
@@ -687,13 +794,7 @@ def trace(
         theta == np.take_along_axis(seg_start, segment, -1),
         theta == np.take_along_axis(seg_end, segment, -1),
     )
-    motion = evaluate(
-        plan, params, theta, points=points, branches=branches or None, order=order, crossings=on
-    )
-    keep = np.isfinite(theta)
-    if keep.all():
-        return motion
-    return _restrict(motion, keep)
+    return theta, branches, on
 
 
 def _sample_segments(
@@ -1192,8 +1293,9 @@ def _next_limit(plan, params, points, theta, direction, branches, period, grid=G
     found = np.zeros(shape, dtype=bool)
     a = np.full(shape, np.nan)
     b = np.full(shape, np.nan)
-    for c0 in range(1, nodes + 1, SCAN_CHUNK):
-        j = np.arange(c0, min(c0 + SCAN_CHUNK, nodes + 1))
+    chunk = max(SCAN_CHUNK, SCAN_NUMBERS // max(theta.size, 1))
+    for c0 in range(1, nodes + 1, chunk):
+        j = np.arange(c0, min(c0 + chunk, nodes + 1))
         th = theta[..., None] + step[..., None] * j
         ok, _ = _assembled(plan, params, points, th, br)
         ok = np.broadcast_to(ok, th.shape)
@@ -1208,12 +1310,12 @@ def _next_limit(plan, params, points, theta, direction, branches, period, grid=G
             break
     a = np.where(found, a, theta)
     b = np.where(found, b, theta)
-    for _ in range(BISECTIONS):
-        mid = 0.5 * (a + b)
-        ok, _ = _assembled(plan, params, points, mid[..., None], br)
-        ok = np.broadcast_to(ok, mid.shape + (1,))[..., 0]
-        a = np.where(ok, mid, a)
-        b = np.where(ok, b, mid)
+
+    def go_right(mid: Array) -> NDArray[np.bool_]:
+        ok, _ = _assembled(plan, params, points, mid, br)
+        return np.broadcast_to(ok, mid.shape)
+
+    a, b = _bisect(a, b, go_right)
     _, margins = _assembled(plan, params, points, a[..., None], br)
     which = np.argmin(margins[..., 0, :], axis=-1)
     return a, np.broadcast_to(which, shape), found

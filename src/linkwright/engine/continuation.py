@@ -26,9 +26,13 @@ The result names, for each limit position, the configurations that join there.
 
 from __future__ import annotations
 
+import copy
 import itertools
-from collections.abc import Mapping
+import threading
+from collections import OrderedDict
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,9 +42,101 @@ from linkwright.engine.arcs import InputArcs
 from linkwright.engine.evaluate import Motion, batch_shape, evaluate
 from linkwright.engine.plan import DYAD_TYPES, Fixed, Plan
 
-__all__ = ["Circuit", "Limit", "arcs_of", "every_circuit", "every_configuration"]
+__all__ = [
+    "Circuit",
+    "Limit",
+    "Memo",
+    "arcs_of",
+    "circuit_arcs",
+    "every_circuit",
+    "every_configuration",
+    "forget_kept",
+]
 
 Array = NDArray[np.float64]
+T = TypeVar("T")
+
+# A workbench scene asks for the same linkage's circuits several times (to count them for the
+# budget, to draw them, again with derivatives for the diagrams), and a drag asks again for a
+# document it has just drawn: the parts that do not depend on what is asked of them (a triad's
+# graph of joins, a dyad chain's arcs and samples) are kept for the last few linkages. Only
+# small batches are kept, and few graphs (about a megabyte each), so that the memory held
+# stays within a few tens of megabytes.
+MEMO_SIZE = 32
+MEMO_NUMBERS = 4096
+
+
+_KEPT: list[Memo] = []
+
+
+def forget_kept() -> None:
+    """Forget every kept result (each :class:`Memo`): the next call computes afresh, as a cost
+    measurement must, since the cost model bounds the work without them."""
+    for memo in _KEPT:
+        memo.clear()
+
+
+class Memo:
+    """A small thread-safe LRU of computed values, keyed by a linkage's plan and numbers."""
+
+    def __init__(self, size: int = MEMO_SIZE) -> None:
+        self.size = size
+        self._items: OrderedDict[Hashable, Any] = OrderedDict()
+        self._lock = threading.Lock()
+        _KEPT.append(self)
+
+    def get(self, key: Hashable | None, make: Callable[[], T]) -> T:
+        """The value kept under ``key``, else ``make()`` (kept unless ``key`` is None)."""
+        if key is None:
+            return make()
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                return self._items[key]
+        value = make()
+        with self._lock:
+            self._items[key] = value
+            while len(self._items) > self.size:
+                self._items.popitem(last=False)
+        return value
+
+    def has(self, key: Hashable | None) -> bool:
+        with self._lock:
+            return key is not None and key in self._items
+
+    def put(self, key: Hashable | None, value: Any) -> None:
+        if key is None:
+            return
+        with self._lock:
+            self._items[key] = value
+            self._items.move_to_end(key)
+            while len(self._items) > self.size:
+                self._items.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._items.clear()
+
+
+def memo_key(plan: Plan, params: Mapping[str, ArrayLike], points: frozenset[str], *more) -> Any:
+    """A key naming one linkage's plan and numbers exactly (their bytes), or None where the
+    batch is too large to keep or some value cannot be keyed."""
+    items = []
+    numbers = 0
+    for name in sorted(params):
+        a = np.asarray(params[name])
+        numbers += a.size
+        if numbers > MEMO_NUMBERS or a.dtype.hasobject:
+            return None
+        items.append((name, a.dtype.str, a.shape, a.tobytes()))
+    key = (plan, tuple(items), frozenset(points), *more)
+    try:
+        hash(key)
+    except TypeError:
+        return None
+    return key
+
+
 TWO_PI = 2.0 * np.pi
 GRID = 720
 ROUNDS = 64
@@ -220,6 +316,64 @@ def _join(a: _Sample, b: _Sample) -> tuple[list[tuple[int, int, float]], bool]:
     return pairs, clean
 
 
+def _join_all(
+    intervals: list[tuple[_Sample, _Sample]],
+) -> list[tuple[list[tuple[int, int, float]], bool]]:
+    """:func:`_join` of every interval, the clean ones at once.
+
+    Where every node of ``a`` has a partner of its label in ``b`` within ``CLEAR`` of the
+    separation of the nodes of that label (the clean case, nearly every interval of the grid),
+    the nearest partners are the least-distance assignment and the only one: another pairing
+    moves some node to a partner at least 0.75 of a separation away, more than the 0.25 it
+    replaces. So each node's nearest partner is the join :func:`_join` finds, the same numbers;
+    the other intervals go through :func:`_join` itself.
+    """
+    if not intervals:
+        return []
+    xa = np.stack([a.x for a, _ in intervals])  # (n, C, D)
+    xb = np.stack([b.x for _, b in intervals])
+    la = np.stack([a.label for a, _ in intervals])
+    lb = np.stack([b.label for _, b in intervals])
+    va = np.stack([a.valid for a, _ in intervals])
+    vb = np.stack([b.valid for _, b in intervals])
+    same = va[:, :, None] & vb[:, None, :] & (la[:, :, None] == lb[:, None, :])
+    cost = np.max(np.abs(xa[:, :, None, :] - xb[:, None, :, :]), axis=-1)
+    near_cost = np.where(same, cost, np.inf)
+    partner = np.argmin(near_cost, axis=-1)  # (n, C)
+    moved = np.take_along_axis(near_cost, partner[..., None], -1)[..., 0]
+    kin_a = va[:, :, None] & va[:, None, :] & (la[:, :, None] == la[:, None, :])
+    kin_b = vb[:, :, None] & vb[:, None, :] & (lb[:, :, None] == lb[:, None, :])
+    count_a = kin_a.sum(-1)
+    # Equal counts label by label: each node of a sees as many of its label in b as in a, and
+    # each node of b has its label in a.
+    counts = np.all(~va | (same.sum(-1) == count_a), -1) & np.all(~vb | same.any(1), -1)
+    taken = np.zeros(same.shape, dtype=bool)
+    np.put_along_axis(taken, partner[..., None], va[..., None], -1)
+    onto = np.all(taken.sum(1) <= 1, -1)
+
+    def separation(x: NDArray, kin: NDArray) -> NDArray:
+        d = np.max(np.abs(x[:, :, None, :] - x[:, None, :, :]), axis=-1)
+        eye = np.eye(x.shape[1], dtype=bool)
+        return np.where(kin & ~eye, d, np.inf).min(-1)
+
+    sep_a = separation(xa, kin_a)
+    sep_b = np.take_along_axis(separation(xb, kin_b), partner, -1)
+    near = np.where(count_a > 1, np.minimum(1.0, np.minimum(sep_a, sep_b)), 1.0)
+    close = ~va | ((moved <= CLEAR * near) & (near > 0))
+    fast = counts & onto & np.all(close, -1)
+    out = []
+    for k, (a, b) in enumerate(intervals):
+        if not fast[k]:
+            out.append(_join(a, b))
+            continue
+        rows = np.flatnonzero(va[k])
+        rows = rows[np.argsort(la[k][rows], kind="stable")]  # label by label, as _join
+        out.append(
+            ([(int(i), int(partner[k, i]), float(cost[k, i, partner[k, i]])) for i in rows], True)
+        )
+    return out
+
+
 def _differs_in_one(x: int, y: int) -> bool:
     z = x ^ y
     return z != 0 and z & (z - 1) == 0
@@ -266,8 +420,7 @@ def _graph(solver: _Solver, grid: Array, period: float):
     births: list[tuple[_Sample, int]] = []
     for _ in range(ROUNDS + 1):
         pending = []
-        for a, b in open_:
-            pairs, clean = _join(a, b)
+        for (a, b), (pairs, clean) in zip(open_, _join_all(open_), strict=True):
             if clean:
                 joins += [(a, i, b, j) for i, j, _ in pairs]
             elif b.theta - a.theta <= FOLD_WIDTH * max(1.0, abs(a.theta)) or _ == ROUNDS:
@@ -353,15 +506,24 @@ def arcs_of(found: list[Circuit], shape: tuple[int, ...] = ()) -> InputArcs:
     range of inputs (its lower end in (−π, π]); ``full`` where every circuit turns fully;
     ``never`` where there is none. The configurations are followed, not the assembly held, so
     the arcs of several circuits may overlap."""
+    _one_at_a_time(shape)
+    return _arcs_from([(c.motion.input, c.full) for c in found])
+
+
+def _one_at_a_time(shape: tuple[int, ...]) -> None:
     if shape:
         raise ValueError(
             "the circuits of a linkage with a triad are traced one mechanism at a time: index "
             "the batch (mechanism[i])"
         )
-    rocking = [c for c in found if not c.full]
+
+
+def _arcs_from(found: list[tuple[Array, bool]]) -> InputArcs:
+    """:func:`arcs_of` from each circuit's inputs and whether it turns fully."""
+    rocking = [theta for theta, full in found if not full]
     lo, hi = [], []
-    for c in rocking:
-        x = np.unwrap(c.motion.input)
+    for theta in rocking:
+        x = np.unwrap(theta)
         shift = TWO_PI * np.ceil((x.min() - np.pi) / TWO_PI)  # the lower end into (−π, π]
         lo.append(x.min() - shift)
         hi.append(x.max() - shift)
@@ -375,6 +537,28 @@ def arcs_of(found: list[Circuit], shape: tuple[int, ...] = ()) -> InputArcs:
         dyad_lo=np.full(width, -1),
         dyad_hi=np.full(width, -1),
     )
+
+
+def circuit_arcs(
+    plan: Plan,
+    params: Mapping[str, ArrayLike],
+    samples: int,
+    *,
+    points: frozenset[str] = frozenset(),
+    period: float = TWO_PI,
+    shape: tuple[int, ...] = (),
+) -> InputArcs:
+    """``arcs_of(every_circuit(...))`` without placing the circuits' joints: the arcs need only
+    the inputs each circuit is sampled at (its limits among them), not the configuration
+    followed at each."""
+    _one_at_a_time(shape)
+    key = memo_key(plan, params, points, float(period), GRID)
+    solver, cycles = _GRAPHS.get(key, lambda: _solved_cycles(plan, params, points, period, GRID))
+    found = []
+    for c in cycles:
+        theta, _, limits = _resample(solver, c, samples, period, choose=False)
+        found.append((theta, not limits))
+    return _arcs_from(found)
 
 
 def every_circuit(
@@ -407,7 +591,42 @@ def every_circuit(
     >>> [len(c.limits) for c in found], [sorted({l.before["B"] for l in c.limits}) for c in found]
     ([2, 2], [[-1.0, 1.0], [-1.0, 1.0]])
     """
-    solver = _Solver(plan, params, points)
+    key = memo_key(plan, params, points, float(period), int(grid))
+    solver, cycles = _GRAPHS.get(key, lambda: _solved_cycles(plan, params, points, period, grid))
+    # Which configuration each sample follows does not depend on the order asked for: the
+    # drawing (order 0) and the diagrams (order 2) share it.
+    resampled = _RESAMPLED.get(
+        None if key is None else (key, samples, spacing),
+        lambda: [_resample(solver, c, samples, period, spacing) for c in cycles],
+    )
+    return [
+        Circuit(
+            evaluate(
+                plan,
+                params,
+                theta.copy(),
+                points=points,
+                branches={k: v.copy() for k, v in branches.items()},
+                order=order,
+            ),
+            limits,
+        )
+        for theta, branches, limits in resampled
+    ]
+
+
+_GRAPHS = Memo(8)
+_RESAMPLED = Memo()
+
+
+def _solved_cycles(
+    plan: Plan, params: Mapping[str, ArrayLike], points: frozenset[str], period: float, grid: int
+) -> tuple[_Solver, list]:
+    """The solver and the closed cycles of joins: all of :func:`every_circuit` that does not
+    depend on the samples asked for (kept per linkage, :class:`Memo`)."""
+    # The solver is kept and solves again later: on numbers of its own, which a caller that
+    # changes its arrays in place afterwards cannot change under it.
+    solver = _Solver(plan, copy.deepcopy(dict(params)), points)
     theta0 = -np.pi
     grid_theta = theta0 + period * np.arange(grid) / grid
     # The mechanism's size, for distances between configurations that mean the same everywhere.
@@ -415,8 +634,7 @@ def every_circuit(
     spread = np.where(valid[..., None], np.abs(x), 0.0)
     solver.scale = max(float(spread.max()) if spread.size else 1.0, 1e-300)
     first, wrap, joins, turns = _graph(solver, grid_theta, period)
-    cycles = _cycles(first, wrap, joins, turns, period)
-    return [_resample(solver, c, samples, order, period, spacing) for c in cycles]
+    return solver, _cycles(first, wrap, joins, turns, period)
 
 
 def _unwrapped(cycle, period: float) -> tuple[Array, list[int]]:
@@ -432,12 +650,20 @@ def _unwrapped(cycle, period: float) -> tuple[Array, list[int]]:
 
 
 def _resample(
-    solver: _Solver, cycle, samples: int, order: int, period: float, spacing: str = "input"
-) -> Circuit:
+    solver: _Solver,
+    cycle,
+    samples: int,
+    period: float,
+    spacing: str = "input",
+    *,
+    choose: bool = True,
+) -> tuple[Array, dict[str, Array], tuple[Limit, ...]]:
     """The cycle's nodes resampled to about ``samples`` inputs: every limit a sample, each
     segment between limits (or the whole turn) sampled evenly in the input (sin² spacing
     between limits, as :func:`~linkwright.engine.circuits.trace`), or with ``spacing="path"``
-    evenly in the joints' travel; each sample solved on the configuration followed."""
+    evenly in the joints' travel. Returns the inputs, the configuration followed at each (the
+    branch of each step; not looked for unless ``choose``) and the limits, for the circuit to
+    be solved on."""
     theta, turn_at = _unwrapped(cycle, period)
     combos = [c for _, c, _ in cycle]
     x = np.stack([s.x[c] for s, c, _ in cycle])
@@ -493,27 +719,21 @@ def _resample(
     target_theta = np.concatenate(want_theta)
     target_x = np.concatenate(want_x)
     target_label = np.concatenate(want_label)
-    # Solve every combination at the new inputs and follow the one nearest the interpolation.
-    x_all, label_all, valid_all = solver.solve(target_theta)
-    dist = np.max(np.abs(x_all - target_x[None]), axis=-1)
-    dist = np.where(valid_all & (label_all == target_label[None]), dist, np.inf)
-    # Where no node of the label is real (rounding at a limit), take the nearest of any label.
-    fallback = np.where(valid_all, np.max(np.abs(x_all - target_x[None]), axis=-1), np.inf)
-    choice = np.where(np.isfinite(dist.min(0)), dist.argmin(0), fallback.argmin(0))
-    chosen = [solver.combos[c] for c in choice]
-    branches = {name: np.array([c[name] for c in chosen]) for name, _ in solver.steps}
-    motion = evaluate(
-        solver.plan,
-        solver.params,
-        target_theta,
-        points=solver.points,
-        branches=branches,
-        order=order,
-    )
+    branches: dict[str, Array] = {}
+    if choose:
+        # Solve every combination at the new inputs and follow the one nearest the interpolation.
+        x_all, label_all, valid_all = solver.solve(target_theta)
+        dist = np.max(np.abs(x_all - target_x[None]), axis=-1)
+        dist = np.where(valid_all & (label_all == target_label[None]), dist, np.inf)
+        # Where no node of the label is real (rounding at a limit), take the nearest of any.
+        fallback = np.where(valid_all, np.max(np.abs(x_all - target_x[None]), axis=-1), np.inf)
+        choice = np.where(np.isfinite(dist.min(0)), dist.argmin(0), fallback.argmin(0))
+        chosen = [solver.combos[c] for c in choice]
+        branches = {name: np.array([c[name] for c in chosen]) for name, _ in solver.steps}
     limits = []
     # A circuit with limits starts at one: the node it closes on comes before the first.
     for k in ([0] if turn_at else []) + turn_at:
         before = solver.combos[combos[k - 1]]
         after = solver.combos[combos[k]]
         limits.append(Limit(float(cycle[k][0].theta), dict(before), dict(after)))
-    return Circuit(motion, tuple(limits))
+    return target_theta, branches, tuple(limits)

@@ -59,6 +59,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from linkwright.engine import circuits as _circuits
+from linkwright.engine import continuation as _continuation
 from linkwright.engine.plan import Crank, Plan, SphereCrank
 
 # The tracer's own sizes (linkwright.engine.circuits), read once; the defaults are its values
@@ -376,7 +377,7 @@ def _round_down(n: int) -> int:
     """A number to suggest: three significant digits, rounded down."""
     if n < 1000:
         return n
-    unit = 10 ** (len(str(n)) - 3)
+    unit: int = 10 ** (len(str(n)) - 3)
     return n // unit * unit
 
 
@@ -415,6 +416,10 @@ class Shape:
     space: str
     analytic: bool
     poses: int = 1
+    kept: bool = False
+    """The linkage is small enough that its arcs are kept between calls
+    (:class:`~linkwright.engine.continuation.Memo`): tracing its circuits reuses the one search
+    that counted them instead of searching again for each."""
 
     @classmethod
     def of(
@@ -441,7 +446,9 @@ class Shape:
         poses = 1
         for step in getattr(plan, "triads", ()):
             poses *= int(getattr(step, "max_poses", 1))
-        return cls(len(plan.steps), len(dyads), turns, gear, plan.space, analytic, poses)
+        numbers = sum(np.asarray(v).size for v in params.values())
+        kept = numbers <= _continuation.MEMO_NUMBERS
+        return cls(len(plan.steps), len(dyads), turns, gear, plan.space, analytic, poses, kept)
 
     @classmethod
     def of_mechanism(cls, mechanism: Any, *, periodic: bool = True) -> Shape:
@@ -486,7 +493,7 @@ def _limits(shape: Shape, changes: float | None) -> tuple[float, float]:
     nodes = GRID * shape.turns
     if changes is None:
         changes = min(nodes, 4.0 * max(shape.dyads, 1) * shape.gear * shape.turns)
-    work = j * (nodes + CALL_UNITS)
+    work: float = j * (nodes + CALL_UNITS)
     if changes:
         work += (BISECTIONS + 2) * j * (CALL_UNITS + changes)
     if shape.dyads > 1:
@@ -557,7 +564,9 @@ def trace(
     else:
         sample_work = j * (samples * speed + 3 * CALL_UNITS)
     count = circuits * modes
-    work = count * (search_work + sample_work) + modes * search_work
+    # Each circuit searches its limits again, unless the search that counted them was kept.
+    again = 0.0 if shape.kept else search_work
+    work = count * (again + sample_work) + modes * search_work
     # Each circuit's motion is kept for the answer; the search's grid only while it runs.
     held = count * samples * j * dim * 8 * (1 + order)
     peak = held + max(search_bytes, sample_bytes)

@@ -25,14 +25,16 @@ where the gap is zero there to the rounding of the parents' positions
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
+from linkwright.engine.arcs import InputArcs
 from linkwright.engine.evaluate import place_all
-from linkwright.engine.plan import DyadRRR, Plan, SphereDyad
+from linkwright.engine.plan import DyadRRP, DyadRRR, JointState, Param, Plan, SphereDyad
 from linkwright.geometry import plane, sphere
 
 __all__ = [
@@ -57,6 +59,14 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+Ints = NDArray[np.int64]
+Flags = NDArray[np.bool_]
+Params = Mapping[str, ArrayLike]
+Dyad = DyadRRR | DyadRRP | SphereDyad
+Segments = tuple[Array, Array, dict[str, Array], Ints, Ints]
+"""A circuit's segments: starts, ends, branches, and what each begins and ends at."""
+Turning = Callable[[Plan, str, Params], tuple[Array, Array]]
+"""A parent joint as ``O + w·e^{iθ}`` (complex ``O`` and ``w``), see circuits' analytic case."""
 EPS = float(np.finfo(float).eps)
 TWO_PI = 2.0 * np.pi
 
@@ -77,11 +87,11 @@ BISECTIONS = 64
 PLAIN, LIMIT = -2, -1
 
 
-def _value(p, params) -> Array:
+def _value(p: Param, params: Params) -> Array:
     return np.asarray(params[p] if isinstance(p, str) else p, dtype=float)
 
 
-def _radii_allow(dyad, params) -> tuple[Array, Array]:
+def _radii_allow(dyad: Dyad, params: Params) -> tuple[Flags, Flags]:
     """Whether the dyad's lengths allow its parents to meet: (coinciding, antipodal)."""
     if not isinstance(dyad, DyadRRR | SphereDyad):
         no = np.zeros((), dtype=bool)
@@ -92,7 +102,7 @@ def _radii_allow(dyad, params) -> tuple[Array, Array]:
     return np.abs(r1 - r2) <= RADII_TOL * (r1 + r2), np.zeros((), dtype=bool)
 
 
-def candidates(plan: Plan, params: Mapping, shape: tuple[int, ...]) -> NDArray[np.bool_]:
+def candidates(plan: Plan, params: Params, shape: tuple[int, ...]) -> NDArray[np.bool_]:
     """``shape + (dyads,)``: which dyads of which linkages could meet their parents at all."""
     out = np.zeros(shape + (len(plan.dyads),), dtype=bool)
     for i, d in enumerate(plan.dyads):
@@ -101,7 +111,9 @@ def candidates(plan: Plan, params: Mapping, shape: tuple[int, ...]) -> NDArray[n
     return out
 
 
-def _gap(dyad, states) -> tuple[Array, Array, Array]:
+def _gap(
+    dyad: DyadRRR | SphereDyad, states: Mapping[str, JointState]
+) -> tuple[Array, Array, Array]:
     """The gap D of the dyad's parents, its rounding, and P1·P2 (coincide > 0 > antipodal)."""
     p1, p2 = states[dyad.p1].pos, states[dyad.p2].pos
     if isinstance(dyad, SphereDyad):
@@ -113,7 +125,9 @@ def _gap(dyad, states) -> tuple[Array, Array, Array]:
     return gap, noise, dot
 
 
-def _closes_there(dyad, params, dot, samples: bool = True) -> NDArray[np.bool_]:
+def _closes_there(
+    dyad: Dyad, params: Params, dot: Array, samples: bool = True
+) -> NDArray[np.bool_]:
     """Whether the links allow the parents' meeting: equal for coinciding parents, summing to
     π for antipodal ones. ``dot`` has the batch shape, plus a samples axis if ``samples``."""
     same, opposite = _radii_allow(dyad, params)
@@ -123,18 +137,20 @@ def _closes_there(dyad, params, dot, samples: bool = True) -> NDArray[np.bool_]:
     return np.where(dot >= 0.0, np.broadcast_to(same, shape), np.broadcast_to(opposite, shape))
 
 
-def meets(dyad, states, params) -> NDArray[np.bool_]:
+def meets(dyad: Dyad, states: Mapping[str, JointState], params: Params) -> NDArray[np.bool_]:
     """Where the dyad's parents meet (to rounding) and its links allow it: the dyad closes
     there with its joint anywhere on one circle, although its own formula is undefined."""
     same, opposite = _radii_allow(dyad, params)
-    if not (np.any(same) or np.any(opposite)):
+    if isinstance(dyad, DyadRRP) or not (np.any(same) or np.any(opposite)):
         return np.zeros(np.shape(states[dyad.p1].pos)[:-1], dtype=bool)
     gap, noise, dot = _gap(dyad, states)
     small = np.sqrt(np.sum(gap * gap, axis=-1)) <= CROSSING_ULPS * noise
-    return small & _closes_there(dyad, params, dot) & states[dyad.p1].valid & states[dyad.p2].valid
+    both = states[dyad.p1].valid & states[dyad.p2].valid
+    met: NDArray[np.bool_] = small & _closes_there(dyad, params, dot) & both
+    return met
 
 
-def analytic_crossings(plan: Plan, params: Mapping, turning) -> Array:
+def analytic_crossings(plan: Plan, params: Params, turning: Turning) -> Array:
     """The crossing input of the one dyad of a plan whose parents turn with the input (batch
     shape, NaN where its parents never meet): θc = arg(big) − arg(arm) + π where |big| = |arm|.
 
@@ -142,6 +158,8 @@ def analytic_crossings(plan: Plan, params: Mapping, turning) -> Array:
     case).
     """
     (dyad,) = plan.dyads
+    if isinstance(dyad, DyadRRP):
+        raise TypeError(f"dyad {dyad.name} runs on a guide: its parents never meet")
     o1, w1 = turning(plan, dyad.p1, params)
     o2, w2 = turning(plan, dyad.p2, params)
     big, arm = o2 - o1, w2 - w1
@@ -153,9 +171,11 @@ def analytic_crossings(plan: Plan, params: Mapping, turning) -> Array:
     return np.where(hit, np.remainder(theta + np.pi, TWO_PI) - np.pi, np.nan)
 
 
-def take_rows(params: Mapping, points, shape, rows) -> dict[str, Array]:
+def take_rows(
+    params: Params, points: frozenset[str], shape: tuple[int, ...], rows: NDArray[np.intp]
+) -> dict[str, Array]:
     """The parameters of the linkages ``rows`` (indices into the flattened batch)."""
-    out = {}
+    out: dict[str, Array] = {}
     for key, value in params.items():
         a = np.asarray(value, dtype=float)
         tail = a.shape[-1:] if key in points else ()
@@ -165,8 +185,8 @@ def take_rows(params: Mapping, points, shape, rows) -> dict[str, Array]:
 
 def crossings_within(
     plan: Plan,
-    params: Mapping,
-    points,
+    params: Params,
+    points: frozenset[str],
     start: Array,
     stop: Array,
     cells: int,
@@ -201,7 +221,13 @@ def crossings_within(
 
 
 def crossings_in_period(
-    plan: Plan, params: Mapping, points, usable, period: Array, cells: int, branches
+    plan: Plan,
+    params: Params,
+    points: frozenset[str],
+    usable: Flags,
+    period: Array,
+    cells: int,
+    branches: Mapping[str, Array] | None,
 ) -> Array:
     """Every crossing over one period of the input, in [−π, −π + period), ``batch + (K,)``
     (NaN-padded), each once: the scan runs a little past the period's end, so that one at
@@ -221,7 +247,13 @@ def crossings_in_period(
     return at.reshape(shape + at.shape[-1:])
 
 
-def _pad(found_t, found_k, found_row, a, shape):
+def _pad(
+    found_t: list[Array],
+    found_k: list[Ints],
+    found_row: list[Ints],
+    a: Array,
+    shape: tuple[int, ...],
+) -> tuple[Array, Ints]:
     size = a.size
     t = np.concatenate(found_t) if found_t else np.zeros(0)
     k = np.concatenate(found_k) if found_k else np.zeros(0, dtype=np.int64)
@@ -239,12 +271,20 @@ def _pad(found_t, found_k, found_row, a, shape):
     return out_t.reshape(shape + (width,)), out_k.reshape(shape + (width,))
 
 
-def _gaps_at(plan, params, points, theta, branches, allow):
+def _gaps_at(
+    plan: Plan,
+    params: Params,
+    points: frozenset[str],
+    theta: Array,
+    branches: Mapping[str, Array],
+    allow: Flags,
+) -> list[tuple[Array, Array, Array] | None]:
     """Each allowed dyad's gap, rounding and P1·P2 at inputs ``theta`` (rows × nodes)."""
     _, states = place_all(plan, params, theta, points=points, branches=branches, order=0)
-    out = []
+    out: list[tuple[Array, Array, Array] | None] = []
     for i, d in enumerate(plan.dyads):
-        if not allow[:, i].any():
+        # A slider dyad is never allowed (its parents cannot meet).
+        if isinstance(d, DyadRRP) or not allow[:, i].any():
             out.append(None)
             continue
         gap, noise, dot = _gap(d, states)
@@ -253,11 +293,25 @@ def _gaps_at(plan, params, points, theta, branches, allow):
     return out
 
 
-def _scan(plan, params, points, a, b, cells, branches, allow, chunk):
+def _scan(
+    plan: Plan,
+    params: Params,
+    points: frozenset[str],
+    a: Array,
+    b: Array,
+    cells: int,
+    branches: Mapping[str, Array],
+    allow: Flags,
+    chunk: int,
+) -> tuple[Array, Ints, Ints]:
     """:func:`crossings_within` for rows ``(m,)``: the crossings found, their dyads and rows."""
     step = (b - a) / cells
-    cand_row, cand_k, cand_lo, cand_hi, cand_u = [], [], [], [], []
-    prev = None
+    cand_row: list[Ints] = []
+    cand_k: list[Ints] = []
+    cand_lo: list[Array] = []
+    cand_hi: list[Array] = []
+    cand_u: list[Array] = []
+    prev: tuple[list[Array | None], Array] | None = None
     for c0 in range(0, cells + 1, chunk):
         j = np.arange(c0, min(c0 + chunk, cells + 1))
         theta = a[:, None] + step[:, None] * j
@@ -279,7 +333,9 @@ def _scan(plan, params, points, a, b, cells, branches, allow, chunk):
             cand_u.append(np.ones((r.size, gap.shape[-1])))
             th = theta
             if prev is not None:
-                gap = np.concatenate((prev[0][i][:, None], gap), axis=1)
+                last = prev[0][i]
+                assert last is not None  # the same dyads are allowed in every chunk
+                gap = np.concatenate((last[:, None], gap), axis=1)
                 th = np.concatenate((prev[1][:, None], theta), axis=1)
             d0, d1 = gap[:, :-1], gap[:, 1:]
             u = d1 - d0
@@ -314,7 +370,17 @@ def _scan(plan, params, points, a, b, cells, branches, allow, chunk):
     return theta[keep], k[keep], row[keep]
 
 
-def _refine(plan, params, points, row, k, lo, hi, u, branches):
+def _refine(
+    plan: Plan,
+    params: Params,
+    points: frozenset[str],
+    row: Ints,
+    k: Ints,
+    lo: Array,
+    hi: Array,
+    u: Array,
+    branches: Mapping[str, Array],
+) -> tuple[Array, Flags]:
     """Bisect each candidate cell on the sign of the gap's component along its chord ``u``.
 
     ``lo`` is the end where that component is negative. Returns the input with the smaller gap
@@ -350,7 +416,14 @@ def _refine(plan, params, points, row, k, lo, hi, u, branches):
     return theta, (size <= CROSSING_ULPS * noise) & allowed
 
 
-def _gap_of(plan, params, points, theta, branches, which):
+def _gap_of(
+    plan: Plan,
+    params: Params,
+    points: frozenset[str],
+    theta: Array,
+    branches: Mapping[str, Array],
+    which: Ints,
+) -> tuple[Array, Array, Array]:
     """The gap of dyad ``which[i]`` at ``theta[i]`` for each row i (rows are linkages)."""
     _, states = place_all(plan, params, theta[:, None], points=points, branches=branches, order=0)
     dim = 3 if plan.space == "sphere" else 2
@@ -359,14 +432,16 @@ def _gap_of(plan, params, points, theta, branches, which):
     dot = np.full(theta.size, np.nan)
     for i, d in enumerate(plan.dyads):
         sel = which == i
-        if not sel.any():
+        if isinstance(d, DyadRRP) or not sel.any():
             continue
         g, n, p = _gap(d, states)
         gap[sel], noise[sel], dot[sel] = g[sel, 0], n[sel, 0], p[sel, 0]
     return gap, noise, dot
 
 
-def merge_arcs(plan: Plan, params: Mapping, points, arcs, cells: int):
+def merge_arcs(
+    plan: Plan, params: Params, points: frozenset[str], arcs: InputArcs, cells: int
+) -> InputArcs:
     """Input arcs (``InputArcs``) with the arcs that meet at a crossing joined into one.
 
     Arcs are found with every dyad's sign held; where a dyad's parents meet, the sign held
@@ -388,10 +463,10 @@ def merge_arcs(plan: Plan, params: Mapping, points, arcs, cells: int):
         plan, params, points, np.isfinite(arcs.lo[..., 0]), period, cells, doc
     )
     size = int(np.prod(shape, dtype=np.int64))
-    full = np.array(np.broadcast_to(arcs.full, shape)).reshape(size)
+    full: Flags = np.array(np.broadcast_to(arcs.full, shape)).reshape(size)
     flat = [np.array(a).reshape(size, -1) for a in (arcs.lo, arcs.hi, arcs.dyad_lo, arcs.dyad_hi)]
     cross = cross.reshape(size, -1)
-    rows = []
+    rows: list[list[list[Any]]] = []
     per = period.reshape(size)
     for i in range(size):
         keep = np.isfinite(flat[0][i])
@@ -401,7 +476,7 @@ def merge_arcs(plan: Plan, params: Mapping, points, arcs, cells: int):
             full[i] |= _join(ends, cs, per[i])
         rows.append(ends)
     width = max(max(len(r[0]) for r in rows), 1)
-    out = [np.full((size, width), np.nan) for _ in range(2)]
+    out: list[NDArray[Any]] = [np.full((size, width), np.nan) for _ in range(2)]
     out += [np.full((size, width), -1, dtype=np.int64) for _ in range(2)]
     for i, r in enumerate(rows):
         order = np.argsort(r[0])
@@ -420,11 +495,11 @@ def merge_arcs(plan: Plan, params: Mapping, points, arcs, cells: int):
     )
 
 
-def _join(ends, cs, period) -> bool:
+def _join(ends: list[list[Any]], cs: Array, period: float) -> bool:
     """Join, in place, the arcs ``ends`` = [lo, hi, dyad_lo, dyad_hi] (lists, sorted by lo)
     that meet at a crossing in ``cs``; True if one arc then covers the whole period."""
 
-    def at_crossing(x):
+    def at_crossing(x: float) -> bool:
         gap = np.remainder(cs - x + 0.5 * period, period) - 0.5 * period
         return bool(np.any(np.abs(gap) <= 1e-9 * period))
 
@@ -444,7 +519,7 @@ def _join(ends, cs, period) -> bool:
     return one
 
 
-def scatter(full, part, mask):
+def scatter(full: Segments, part: Segments, mask: Flags) -> Segments:
     """Put ``part``'s segments (the linkages in ``mask``) into ``full``'s, widened as needed.
 
     Segments are (starts, ends, branches, what each begins at, what each ends at).
@@ -452,14 +527,14 @@ def scatter(full, part, mask):
     (s0, e0, b0, g0, h0), (s1, e1, b1, g1, h1) = full, part
     width = max(s0.shape[-1], s1.shape[-1])
 
-    def widen(a, fill=np.nan):
+    def widen(a: NDArray[Any], fill: float = np.nan) -> NDArray[Any]:
         pad = width - a.shape[-1]
         return np.concatenate((a, np.full(a.shape[:-1] + (pad,), fill, a.dtype)), -1) if pad else a
 
     s0, e0, s1, e1 = (widen(a).copy() for a in (s0, e0, s1, e1))
     g0, h0, g1, h1 = (widen(a, PLAIN).copy() for a in (g0, h0, g1, h1))
     s0[mask], e0[mask], g0[mask], h0[mask] = s1, e1, g1, h1
-    branches = {}
+    branches: dict[str, Array] = {}
     for k in b0:
         b = widen(b0[k]).copy()
         b[mask] = widen(b1[k])
@@ -468,8 +543,16 @@ def scatter(full, part, mask):
 
 
 def cut_single(
-    plan: Plan, params: Mapping, points, segs, arcs, usable, doc, grid: int, turning=None
-):
+    plan: Plan,
+    params: Params,
+    points: frozenset[str],
+    segs: Segments,
+    arcs: InputArcs,
+    usable: Flags,
+    doc: Mapping[str, Array],
+    grid: int,
+    turning: Turning | None = None,
+) -> Segments:
     """A one-dyad circuit's segments ``segs`` (see :func:`scatter`) cut at its crossings.
 
     They do not depend on the dyad's own branch: in closed form where its parents turn with
@@ -569,7 +652,10 @@ def _shifted(cs: Array, lo: float, hi: float, period: float) -> list[float]:
     return sorted(out)
 
 
-def _cut_turn(start, period, cs, sign):
+Cuts = tuple[list[float], list[float], list[float], list[int], list[int]]
+
+
+def _cut_turn(start: float, period: float, cs: Array, sign: float) -> Cuts:
     turns = 1 if len(cs) % 2 == 0 else 2
     events = _shifted(cs, start, start + turns * period, period)
     bounds = [start, *events, start + turns * period]
@@ -583,11 +669,15 @@ def _cut_turn(start, period, cs, sign):
     return bounds[:-1], bounds[1:], signs, begin, end
 
 
-def _cut_arc(lo, hi, period, cs, sign):
+def _cut_arc(lo: float, hi: float, period: float, cs: Array, sign: float) -> Cuts:
     events = _shifted(cs, lo, hi, period)
     up = [lo, *events, hi]
     down = up[::-1]
-    bounds0, bounds1, signs, begin, end = [], [], [], [], []
+    bounds0: list[float] = []
+    bounds1: list[float] = []
+    signs: list[float] = []
+    begin: list[int] = []
+    end: list[int] = []
     s = sign
     for path in (up, down):
         n = len(path) - 1
@@ -601,7 +691,13 @@ def _cut_arc(lo, hi, period, cs, sign):
     return bounds0, bounds1, signs, begin, end
 
 
-def starts_on(plan: Plan, params: Mapping, points, theta: Array, branches) -> NDArray[np.int64]:
+def starts_on(
+    plan: Plan,
+    params: Params,
+    points: frozenset[str],
+    theta: Array,
+    branches: Mapping[str, ArrayLike] | None,
+) -> NDArray[np.int64]:
     """``PLAIN``, or the index of a dyad whose parents meet at ``theta`` (batch-shaped)."""
     allow = candidates(plan, params, np.shape(theta))
     out = np.full(np.shape(theta), PLAIN, dtype=np.int64)
@@ -639,7 +735,10 @@ def warp(code: NDArray[np.int64], f: Array) -> Array:
 
 
 def warp_codes(begin: NDArray[np.int64], end: NDArray[np.int64]) -> NDArray[np.int64]:
-    return (begin == LIMIT).astype(np.int64) + 2 * (end == LIMIT).astype(np.int64)
+    codes: NDArray[np.int64] = (begin == LIMIT).astype(np.int64) + 2 * (end == LIMIT).astype(
+        np.int64
+    )
+    return codes
 
 
 def flags(
@@ -659,12 +758,13 @@ def flags(
     if not (np.any(begin >= 0) or np.any(end >= 0)):
         return None
 
-    def take(a):
+    def take(a: NDArray[Any]) -> NDArray[Any]:
         return np.take_along_axis(a, segment, -1)
 
     direction = np.sign(np.nan_to_num(take(seg_end) - take(seg_start)))
     b, e = take(begin), take(end)
-    out = {}
+    out: dict[str, Array] = {}
+
     for i, d in enumerate(plan.dyads):
         side = np.where(at_start & (b == i), direction, 0.0)
         if at_end is not None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -13,6 +14,8 @@ from linkwright.engine.plan import JointState, Param, Plan
 __all__ = ["Motion", "evaluate", "place_all", "take"]
 
 Array = NDArray[np.float64]
+Index = int | slice | NDArray[np.integer[Any]] | NDArray[np.bool_]
+"""A selection of batch entries: one, a slice, or an array of indices or of flags."""
 
 
 @dataclass(frozen=True)
@@ -35,6 +38,19 @@ class Motion:
         triad's joints: its signed closure.
     labels : joint name → the branch's label, which changes along a circuit only at a limit
         position (a dyad's sign; a triad's closure sign): where faces find a circuit's legs.
+
+    Examples
+    --------
+    >>> from linkwright import FourBar, solve
+    >>> motion = solve(FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=3, rocker=3.5), [0, 1, 2])
+    >>> motion.positions["B"].shape, bool(motion.valid.all())
+    ((3, 2), True)
+
+    Where the linkage cannot assemble its positions are NaN and ``valid`` is False:
+
+    >>> far = solve(FourBar(A0=[0, 0], B0=[9, 0], crank=1, coupler=3, rocker=3.5), [0.0])
+    >>> bool(far.valid[0]), bool(np.isnan(far.positions["B"]).all())
+    (False, True)
     """
 
     input: Array
@@ -51,11 +67,18 @@ class Motion:
     def shape(self) -> tuple[int, ...]:
         return self.input.shape
 
+    def _repr_svg_(self) -> str | None:
+        # Jupyter's picture of the joints' paths, drawn by the plots (above this layer) through
+        # linkwright._display, which the package root fills.
+        from linkwright._display import repr_svg
+
+        return repr_svg(self)
+
 
 class _Context:
     def __init__(
         self,
-        params: Mapping[str, Array],
+        params: Mapping[str, ArrayLike],
         theta: Array,
         branches: Mapping[str, ArrayLike],
         order: int,
@@ -75,7 +98,7 @@ class _Context:
     def scalar(self, p: Param) -> Array:
         if isinstance(p, str):
             return np.asarray(self.params[p], dtype=float)[..., None]
-        return np.float64(p)
+        return np.asarray(p, dtype=float)
 
     def point(self, key: str) -> Array:
         return np.asarray(self.params[key], dtype=float)[..., None, :]
@@ -99,7 +122,7 @@ class _Context:
         return np.broadcast_to(np.asarray(side, dtype=float), self._theta.shape)
 
 
-def take(motion: Motion, index: object) -> Motion:
+def take(motion: Motion, index: Index) -> Motion:
     """The motion of the batch entries at ``index`` (over the leading axes of ``input``): every
     array indexed alike, the samples' axis and the coordinates' kept.
 
@@ -110,15 +133,15 @@ def take(motion: Motion, index: object) -> Motion:
     """
 
     def pick(arrays: dict[str, Array] | None) -> dict[str, Array] | None:
-        return None if arrays is None else {k: v[index] for k, v in arrays.items()}  # type: ignore[index]
+        return None if arrays is None else {k: v[index] for k, v in arrays.items()}
 
     return Motion(
-        input=motion.input[index],  # type: ignore[index]
+        input=motion.input[index],
         positions=pick(motion.positions) or {},
         velocities=pick(motion.velocities),
         accelerations=pick(motion.accelerations),
-        valid=motion.valid[index],  # type: ignore[index]
-        regular=motion.regular[index],  # type: ignore[index]
+        valid=motion.valid[index],
+        regular=motion.regular[index],
         branches=pick(motion.branches) or {},
         margins=pick(motion.margins) or {},
         labels=pick(motion.labels) or {},

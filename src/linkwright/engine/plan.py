@@ -118,7 +118,7 @@ class Plan:
         return tuple(j for s in self.steps for j in placed_joints(s))
 
     @property
-    def dyads(self) -> tuple[Step, ...]:
+    def dyads(self) -> tuple[DyadRRR | DyadRRP | SphereDyad, ...]:
         return tuple(s for s in self.steps if isinstance(s, DYAD_TYPES))
 
     @property
@@ -203,16 +203,17 @@ class Plan:
         for s in self.steps:
             worst = np.maximum(worst, s.residual(motion.positions, params, theta))
         if self.space == "plane":
+            scale: Array
             if size is None:
                 origin = motion.positions[self.joints[0]]
                 reach = [np.linalg.norm(p - origin, axis=-1) for p in motion.positions.values()]
                 with np.errstate(invalid="ignore"):
                     extent = np.where(motion.valid, np.maximum.reduce(reach), 0.0)
-                size = np.max(extent, axis=-1, keepdims=True)
+                scale = np.max(extent, axis=-1, keepdims=True)
             else:
-                size = np.asarray(size, dtype=float)[..., None]
+                scale = np.asarray(size, dtype=float)[..., None]
             with np.errstate(divide="ignore", invalid="ignore"):
-                worst = worst / np.where(size > 0, size, 1.0)
+                worst = worst / np.where(scale > 0, scale, 1.0)
         return np.where(motion.valid, worst, np.nan)
 
 

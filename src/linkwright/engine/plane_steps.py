@@ -30,6 +30,7 @@ from linkwright.engine.state import (
     always,
     at_crossing,
     combine,
+    derivative,
     first,
     mask_derivatives,
     number,
@@ -80,7 +81,8 @@ class Fixed:
 
     def residual(self, positions: Positions, params: Params, theta: ArrayLike) -> Array:
         """How far the pivot is from its point."""
-        return np.linalg.norm(positions[self.name] - param_point(self.at, params), axis=-1)
+        off: Array = np.linalg.norm(positions[self.name] - param_point(self.at, params), axis=-1)
+        return off
 
     def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
         return f"the ground pivot {self.name} has no finite place ({self.at})"
@@ -106,9 +108,9 @@ class Crank(OnPivot):
         pos = o.pos + arm
         vel = acc = None
         if ctx.order >= 1:
-            vel = o.vel + (k * r)[..., None] * np.stack((-s, c), axis=-1)
+            vel = derivative(o.vel) + (k * r)[..., None] * np.stack((-s, c), axis=-1)
         if ctx.order >= 2:
-            acc = o.acc - (k * k)[..., None] * arm
+            acc = derivative(o.acc) - (k * k)[..., None] * arm
         return JointState(pos, vel, acc, o.valid, o.regular)
 
     def closure(self, positions: Positions, params: Params) -> Array:
@@ -148,7 +150,7 @@ class DyadRRR(TwoLinkDyad):
         if at is not None:
             # Where P1 and P2 coincide, P − P1 ⟂ P2 − P1 in the limit, which turns with
             # the parents' relative velocity (P2 − P1 ≈ (v2 − v1)·Δθ).
-            rate = j2.vel - j1.vel
+            rate = derivative(j2.vel) - derivative(j1.vel)
             with np.errstate(divide="ignore", invalid="ignore"):
                 arm = plane.perp(rate) / plane.norm(rate)[..., None]
             limit = j1.pos + (sign * at * r1)[..., None] * arm
@@ -161,16 +163,15 @@ class DyadRRR(TwoLinkDyad):
             regular &= at == 0  # the derivative system is singular there
         vel = acc = None
         if ctx.order >= 1:
-            vel, _ = plane.solve_2x2_rows(
-                rel1, rel2, plane.dot(rel1, j1.vel), plane.dot(rel2, j2.vel)
-            )
+            v1, v2 = derivative(j1.vel), derivative(j2.vel)
+            vel, _ = plane.solve_2x2_rows(rel1, rel2, plane.dot(rel1, v1), plane.dot(rel2, v2))
         if ctx.order >= 2:
-            w1, w2 = vel - j1.vel, vel - j2.vel
+            w1, w2 = derivative(vel) - v1, derivative(vel) - v2
             acc, _ = plane.solve_2x2_rows(
                 rel1,
                 rel2,
-                plane.dot(rel1, j1.acc) - plane.dot(w1, w1),
-                plane.dot(rel2, j2.acc) - plane.dot(w2, w2),
+                plane.dot(rel1, derivative(j1.acc)) - plane.dot(w1, w1),
+                plane.dot(rel2, derivative(j2.acc)) - plane.dot(w2, w2),
             )
         vel, acc = mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
@@ -257,11 +258,17 @@ class DyadRRP:
         regular &= margin > SINGULAR_MARGIN
         vel = acc = None
         if ctx.order >= 1:
-            vel, _ = plane.solve_2x2_rows(rel1, n, plane.dot(rel1, j1.vel), plane.dot(n, jl.vel))
+            v1 = derivative(j1.vel)
+            vel, _ = plane.solve_2x2_rows(
+                rel1, n, plane.dot(rel1, v1), plane.dot(n, derivative(jl.vel))
+            )
         if ctx.order >= 2:
-            w1 = vel - j1.vel
+            w1 = derivative(vel) - v1
             acc, _ = plane.solve_2x2_rows(
-                rel1, n, plane.dot(rel1, j1.acc) - plane.dot(w1, w1), plane.dot(n, jl.acc)
+                rel1,
+                n,
+                plane.dot(rel1, derivative(j1.acc)) - plane.dot(w1, w1),
+                plane.dot(n, derivative(jl.acc)),
             )
         vel, acc = mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
@@ -328,8 +335,13 @@ class Rigid(OnLink):
         valid, regular = combine(jo, jt)
         valid = valid & np.isfinite(inv_len)
         pos = np.where(valid[..., None], jo.pos + local(delta), np.nan)
-        vel = jo.vel + local(jt.vel - jo.vel) if ctx.order >= 1 else None
-        acc = jo.acc + local(jt.acc - jo.acc) if ctx.order >= 2 else None
+        vel = acc = None
+        if ctx.order >= 1:
+            vo = derivative(jo.vel)
+            vel = vo + local(derivative(jt.vel) - vo)
+        if ctx.order >= 2:
+            ao = derivative(jo.acc)
+            acc = ao + local(derivative(jt.acc) - ao)
         regular = regular & valid
         vel, acc = mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular)
@@ -407,8 +419,12 @@ class Trammel:
         pos = np.where(valid[..., None], along(g1.pos, g2.pos, w), np.nan)
         regular = regular & valid
         # dw/dθ = perp(w) and d²w/dθ² = −w: the arm turns one-for-one with the input.
-        vel = along(g1.vel, g2.vel, plane.perp(w)) if ctx.order >= 1 else None
-        acc = along(g1.acc, g2.acc, -w) if ctx.order >= 2 else None
+        vel = acc = None
+        if ctx.order >= 1:
+            vel = along(derivative(g1.vel), derivative(g2.vel), plane.perp(w))
+        if ctx.order >= 2:
+            acc = along(derivative(g1.acc), derivative(g2.acc), -w)
+
         vel, acc = mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular)
 

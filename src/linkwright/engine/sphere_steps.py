@@ -30,6 +30,7 @@ from linkwright.engine.state import (
     TwoLinkDyad,
     at_crossing,
     combine,
+    derivative,
     first,
     mask_derivatives,
     number,
@@ -81,7 +82,7 @@ class SphereCrank(OnPivot):
         if ctx.order >= 1:
             vel = rate * sphere.cross(o.pos, pos)
         if ctx.order >= 2:
-            acc = rate * sphere.cross(o.pos, vel)
+            acc = rate * sphere.cross(o.pos, derivative(vel))
         regular = valid & o.regular
         vel, acc = mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular)
@@ -102,7 +103,8 @@ class SphereCrank(OnPivot):
         turn = sphere.angle_at(o, param_point(self.ref, params), x) - phi
         turn = np.abs(np.angle(np.exp(1j * turn)))  # wrapped to [0, π]
         arc = np.abs(sphere.arc(o, x) - length)
-        return np.maximum.reduce([arc, turn * np.abs(np.sin(length)), _unit_error(x)])
+        worst: Array = np.maximum.reduce([arc, turn * np.abs(np.sin(length)), _unit_error(x)])
+        return worst
 
     def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
         return (
@@ -141,7 +143,9 @@ class SphereDyad(TwoLinkDyad):
         if at is not None:
             # Where P1 and P2 coincide or are antipodal, X → cos r1·P1 + sin r1·(±n) with n
             # the unit P1 × P2, which turns with its derivative v1 × P2 + P1 × v2.
-            rate = sphere.unit(sphere.cross(j1.vel, p2) + sphere.cross(p1, j2.vel))
+            rate = sphere.unit(
+                sphere.cross(derivative(j1.vel), p2) + sphere.cross(p1, derivative(j2.vel))
+            )
             limit = np.cos(r1)[..., None] * p1 + (sign * at * np.sin(r1))[..., None] * rate
             pos, valid, margin = at_crossing(at, limit, pos, valid, margin, j1, j2)
         # sin of the angle at X between its two links: 0 at a limit (toggle) position.
@@ -157,22 +161,27 @@ class SphereDyad(TwoLinkDyad):
         vel, acc = mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular, margin=margin, branch=sign)
 
-    def _rates(self, ctx, j1, j2, pos, zero):
+    def _rates(
+        self, ctx: Context, j1: JointState, j2: JointState, pos: Array, zero: Array
+    ) -> tuple[Array | None, Array | None]:
         p1, p2 = j1.pos, j2.pos
         vel = acc = None
         if ctx.order >= 1:
+            v1, v2 = derivative(j1.vel), derivative(j2.vel)
             vel, _ = sphere.solve_3x3_rows(
-                p1, p2, pos, -sphere.dot(pos, j1.vel), -sphere.dot(pos, j2.vel), zero
+                p1, p2, pos, -sphere.dot(pos, v1), -sphere.dot(pos, v2), zero
             )
         if ctx.order >= 2:
+            v = derivative(vel)
             acc, _ = sphere.solve_3x3_rows(
                 p1,
                 p2,
                 pos,
-                -2.0 * sphere.dot(vel, j1.vel) - sphere.dot(pos, j1.acc),
-                -2.0 * sphere.dot(vel, j2.vel) - sphere.dot(pos, j2.acc),
-                -sphere.dot(vel, vel),
+                -2.0 * sphere.dot(v, v1) - sphere.dot(pos, derivative(j1.acc)),
+                -2.0 * sphere.dot(v, v2) - sphere.dot(pos, derivative(j2.acc)),
+                -sphere.dot(v, v),
             )
+
         return vel, acc
 
     def closure(self, positions: Positions, params: Params) -> Array:
@@ -186,7 +195,8 @@ class SphereDyad(TwoLinkDyad):
         x = positions[self.name]
         e1 = sphere.arc(positions[self.p1], x) - param_value(self.r1, params)
         e2 = sphere.arc(positions[self.p2], x) - param_value(self.r2, params)
-        return np.maximum.reduce([np.abs(e1), np.abs(e2), _unit_error(x)])
+        worst: Array = np.maximum.reduce([np.abs(e1), np.abs(e2), _unit_error(x)])
+        return worst
 
     def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
         """Why the dyad cannot close: its arcs cannot reach, or cannot fold that short, or its
@@ -238,18 +248,16 @@ class SphereRigid(OnLink):
         pos = np.where(valid[..., None], a * o + b * t + c * ot, np.nan)
         vel = acc = None
         if ctx.order >= 1:
-            vel = a * jo.vel + b * jt.vel + c * (sphere.cross(jo.vel, t) + sphere.cross(o, jt.vel))
+            vo, vt = derivative(jo.vel), derivative(jt.vel)
+            vel = a * vo + b * vt + c * (sphere.cross(vo, t) + sphere.cross(o, vt))
         if ctx.order >= 2:
+            ao, at = derivative(jo.acc), derivative(jt.acc)
             acc = (
-                a * jo.acc
-                + b * jt.acc
-                + c
-                * (
-                    sphere.cross(jo.acc, t)
-                    + 2.0 * sphere.cross(jo.vel, jt.vel)
-                    + sphere.cross(o, jt.acc)
-                )
+                a * ao
+                + b * at
+                + c * (sphere.cross(ao, t) + 2.0 * sphere.cross(vo, vt) + sphere.cross(o, at))
             )
+
         regular = regular & valid
         vel, acc = mask_derivatives(vel, acc, regular)
         return JointState(pos, vel, acc, valid, regular)

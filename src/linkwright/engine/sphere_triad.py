@@ -39,12 +39,13 @@ not exist.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from linkwright.engine.root_sweep import sweep_roots
 from linkwright.engine.state import ASSEMBLY_TOL
-from linkwright.engine.triad import sweep_roots
 from linkwright.geometry import sphere
 
 # A circle's frame and a point on it are sphere geometry; named here too, where the triad's
@@ -217,7 +218,8 @@ def _residual(p: dict[str, Array], b: Array, c: Array, e: Array) -> Array:
         sphere.frame_error(c, b, e, q["ce"], q["turn"]),
         *(np.abs(sphere.norm(v) - 1.0) for v in (b, c, e)),
     ]
-    return np.maximum.reduce(parts)
+    worst: Array = np.maximum.reduce(parts)
+    return worst
 
 
 def _poly_mul(a: Array, b: Array) -> Array:
@@ -389,7 +391,8 @@ def _select(
     # start far from its root may still be converging when the Newton steps end).
     order = np.argsort(np.where(ok, resid, np.inf), axis=-1, kind="stable")
 
-    def take(a: Array) -> Array:
+    # Float and boolean arrays alike.
+    def take(a: NDArray[Any]) -> NDArray[Any]:
         if a.ndim == order.ndim:
             return np.take_along_axis(a, order, axis=-1)
         return np.take_along_axis(a, order[..., None], axis=-2)
@@ -407,7 +410,8 @@ def _select(
     if keep.shape[-1] < MAX_POSES:
         pad = MAX_POSES - keep.shape[-1]
 
-        def padded(a: Array, axis: int, fill: object) -> Array:
+        def padded(a: NDArray[Any], axis: int, fill: float) -> NDArray[Any]:
+
             width = [(0, 0)] * a.ndim
             width[axis] = (0, pad)
             return np.pad(a, width, constant_values=fill)

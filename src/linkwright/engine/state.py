@@ -99,7 +99,10 @@ Params = Mapping[str, ArrayLike]
 
 
 class Step(Protocol):
-    name: str
+    # Read-only: the step kinds are frozen dataclasses, and a protocol's plain attribute would
+    # ask for a settable one.
+    @property
+    def name(self) -> str: ...
 
     @property
     def parents(self) -> tuple[str, ...]: ...
@@ -133,7 +136,7 @@ def param_value(p: Param, params: Params) -> Array:
     gets an axis for the samples, a constant stays a scalar."""
     if isinstance(p, str):
         return np.asarray(params[p], dtype=float)[..., None]
-    return np.float64(p)
+    return np.asarray(p, dtype=float)
 
 
 def param_point(key: str, params: Params) -> Array:
@@ -270,7 +273,13 @@ def combine(*states: JointState) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
 
 
 def at_crossing(
-    at: Array, limit: Array, pos: Array, valid: NDArray[np.bool_], margin: Array, j1, j2
+    at: Array,
+    limit: Array,
+    pos: Array,
+    valid: NDArray[np.bool_],
+    margin: Array,
+    j1: JointState,
+    j2: JointState,
 ) -> tuple[Array, NDArray[np.bool_], Array]:
     """A dyad's joint where its parents coincide: ``limit`` at the samples marked in ``at``.
 
@@ -298,3 +307,14 @@ def mask_derivatives(
 def always(positions: Positions, name: str) -> Array:
     """The closure of a step that assembles wherever its parents do: 1 at every sample."""
     return np.ones(np.shape(positions[name])[:-1])
+
+
+def derivative(x: Array | None) -> Array:
+    """A parent's velocity or acceleration, read where the context's order asked for it.
+
+    A context of order n places every parent to order n, so the derivative is there; None here
+    is a bug in a step kind, not bad input.
+    """
+    if x is None:
+        raise RuntimeError("a step read a derivative above its context's order")
+    return x

@@ -29,7 +29,9 @@ the angular acceleration).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -79,7 +81,9 @@ def _slot(ctx: Context, step_name: str, key: str, most: int) -> tuple[NDArray[np
     return index, asked
 
 
-def _solve_distinct(solve, batch: tuple[int, ...], *args: Array) -> tuple[Array, ...]:
+def _solve_distinct(
+    solve: Callable[..., tuple[NDArray[Any], ...]], batch: tuple[int, ...], *args: Array
+) -> tuple[NDArray[Any], ...]:
     """``solve(*args)`` on each distinct triad once, its results spread back over ``batch``.
 
     Every configuration of a linkage shares its triads' data up to the triad itself (only the
@@ -176,17 +180,18 @@ def triad_residual(
         links = np.abs(plane.norm(joints - anchors) - lengths)
         shape = np.abs(plane.norm(joints[..., 1, :] - joints[..., 0, :]) - side)
         third = plane.frame_error(joints[..., 0, :], joints[..., 1, :], joints[..., 2, :], a, b)
-        worst = np.maximum(np.max(links, axis=-1), np.maximum(shape, third))
+        worst: Array = np.maximum(np.max(links, axis=-1), np.maximum(shape, third))
         return worst / size if relative else worst
     links = np.abs(sphere.arc(joints, anchors) - lengths)
     shape = np.abs(sphere.arc(joints[..., 0, :], joints[..., 1, :]) - side)
     third = sphere.frame_error(joints[..., 0, :], joints[..., 1, :], joints[..., 2, :], a, b)
     unit = np.max(np.abs(sphere.norm(joints) - 1.0), axis=-1)
-    return np.maximum.reduce([np.max(links, axis=-1), shape, third, unit])
+    worst_arc: Array = np.maximum.reduce([np.max(links, axis=-1), shape, third, unit])
+    return worst_arc
 
 
 def _states(
-    step: Triad | SphereTriad,
+    step: _TriadStep,
     pos: Array,
     vel: Array | None,
     acc: Array | None,
@@ -279,8 +284,8 @@ class _TriadStep:
         anchors = self._read(positions, self.anchors)
         shape = joints.shape[:-2]
         lengths = self._lengths(params, shape)
-        body = tuple(np.broadcast_to(param_value(p, params), shape) for p in self.body)
-        return triad_residual(joints, anchors, lengths, body, self.space, relative=False)
+        side, b1, b2 = (np.broadcast_to(param_value(p, params), shape) for p in self.body)
+        return triad_residual(joints, anchors, lengths, (side, b1, b2), self.space, relative=False)
 
     def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
         """Why the step cannot place its joints at an input where it has no pose."""
@@ -301,7 +306,7 @@ class _TriadStep:
 
     def _poses(
         self, shape: tuple[int, ...], anchors: Array, lengths: Array, body: tuple[Array, ...]
-    ) -> tuple[Array, Array]:
+    ) -> tuple[Array, NDArray[np.int_]]:
         """Every pose ``(..., P, 3, d)`` and the count of each triad ``(...)``."""
         raise NotImplementedError
 
@@ -362,18 +367,19 @@ class Triad(_TriadStep):
 
     def _poses(
         self, shape: tuple[int, ...], anchors: Array, lengths: Array, body: tuple[Array, ...]
-    ) -> tuple[Array, Array]:
+    ) -> tuple[Array, NDArray[np.int_]]:
         side, u, v = body
         zero = np.zeros(shape)
         frame = (np.stack((zero, zero), -1), np.stack((side, zero), -1), np.stack((u, v), -1))
 
-        def solve(k: Array, lengths: Array, body: Array) -> tuple[Array, Array]:
+        def solve(k: Array, lengths: Array, body: Array) -> tuple[Array, NDArray[np.int_]]:
             poses = triad_poses(k, lengths, body)
             return poses.joints, poses.count
 
-        return _solve_distinct(
+        joints, count = _solve_distinct(
             solve, shape, np.nan_to_num(anchors), lengths, np.stack(frame, axis=-2)
         )
+        return joints, count
 
     def _rates(
         self, anchors: Array, kvel: Array, kacc: Array | None, pos: Array, lengths: Array
@@ -416,7 +422,7 @@ def sphere_triad_rates(
     True
     """
     rows = sphere.cross(joints, anchors)
-    r = [rows[..., k, :] for k in range(3)]
+    r = rows[..., 0, :], rows[..., 1, :], rows[..., 2, :]
     rhs1 = -sphere.dot(joints, anchor_vel)
     omega, det = sphere.solve_3x3_rows(*r, rhs1[..., 0], rhs1[..., 1], rhs1[..., 2])
     w = omega[..., None, :]
@@ -472,11 +478,11 @@ class SphereTriad(_TriadStep):
 
     def _poses(
         self, shape: tuple[int, ...], anchors: Array, lengths: Array, body: tuple[Array, ...]
-    ) -> tuple[Array, Array]:
+    ) -> tuple[Array, NDArray[np.int_]]:
         # Unplaced anchors (NaN) get stand-ins the solver accepts; their poses are not valid.
-        safe = np.where(
-            np.isfinite(anchors).all(axis=(-1, -2))[..., None, None], anchors, np.eye(3)
-        )
+        placed = np.asarray(np.isfinite(anchors).all(axis=(-1, -2)))
+        safe = np.where(placed[..., None, None], anchors, np.eye(3))
+
         frame_c = sphere.circle_frame(safe[..., 0, :], _reference(safe[..., 0, :], safe[..., 1, :]))
         frame_b = sphere.circle_frame(
             safe[..., 1, :], _reference(safe[..., 1, :], safe[..., 0, :]), self.sense
@@ -484,17 +490,20 @@ class SphereTriad(_TriadStep):
 
         # The solver's B is our J2 (its poses come sorted by B's angle) and its C our J1, from
         # which E = J3 is placed towards B.
-        def solve(*a: Array) -> tuple[Array, Array]:
+        def solve(*a: Array) -> tuple[Array, NDArray[np.int_]]:
             fb, fc, f, lengths, side, arc, angle = a
             poses = sphere_triad(
                 fb, lengths[:, 1], fc, lengths[:, 0], side, arc, angle, f, lengths[:, 2]
             )
             return np.stack((poses.c, poses.b, poses.e), axis=-2), poses.count
 
-        return _solve_distinct(solve, shape, frame_b, frame_c, safe[..., 2, :], lengths, *body)
+        joints, count = _solve_distinct(
+            solve, shape, frame_b, frame_c, safe[..., 2, :], lengths, *body
+        )
+        return joints, count
 
     def _rates(
         self, anchors: Array, kvel: Array, kacc: Array | None, pos: Array, lengths: Array
     ) -> tuple[Array, Array | None, NDArray[np.bool_]]:
         vel, acc, _ = sphere_triad_rates(pos, anchors, kvel, kacc)
-        return vel, acc, np.isfinite(vel).all(axis=(-1, -2))
+        return vel, acc, np.asarray(np.isfinite(vel).all(axis=(-1, -2)))

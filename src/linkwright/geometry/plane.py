@@ -84,7 +84,8 @@ def frame_error(origin: Array, toward: Array, point: Array, u: ArrayLike, v: Arr
     with np.errstate(divide="ignore", invalid="ignore"):
         e = e / norm(e)[..., None]
     rel = point - origin
-    return np.hypot(dot(rel, e) - np.asarray(u), cross(e, rel) - np.asarray(v))
+    error: Array = np.hypot(dot(rel, e) - np.asarray(u), cross(e, rel) - np.asarray(v))
+    return error
 
 
 def polar(length: ArrayLike, angle: ArrayLike) -> Array:

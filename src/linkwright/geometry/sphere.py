@@ -118,7 +118,8 @@ def rotate(v: Array, axis: Array, angle: ArrayLike) -> Array:
     """
     angle = np.asarray(angle, dtype=float)[..., None]
     c, s = np.cos(angle), np.sin(angle)
-    return v * c + cross(axis, v) * s + axis * dot(axis, v)[..., None] * (1.0 - c)
+    rotated: Array = v * c + cross(axis, v) * s + axis * dot(axis, v)[..., None] * (1.0 - c)
+    return rotated
 
 
 def point_at(origin: Array, toward: Array, length: ArrayLike, angle: ArrayLike) -> Array:
@@ -150,7 +151,8 @@ def circle_point(o: Array, e1: Array, e2: Array, arc_: ArrayLike, theta: ArrayLi
     """
     arc_ = np.asarray(arc_, dtype=float)[..., None]
     theta = np.asarray(theta, dtype=float)[..., None]
-    return np.cos(arc_) * o + np.sin(arc_) * (np.cos(theta) * e1 + np.sin(theta) * e2)
+    point: Array = np.cos(arc_) * o + np.sin(arc_) * (np.cos(theta) * e1 + np.sin(theta) * e2)
+    return point
 
 
 def circle_frame(axis: ArrayLike, ref: ArrayLike, sense: ArrayLike = 1.0) -> Array:
@@ -294,7 +296,8 @@ def gram(x: ArrayLike, y: ArrayLike, z: ArrayLike) -> Array:
     """
     x, y, z = (np.asarray(v, dtype=float) for v in (x, y, z))
     s = 0.5 * (x + y + z)
-    return 4.0 * np.sin(s) * np.sin(s - x) * np.sin(s - y) * np.sin(s - z)
+    value: Array = 4.0 * np.sin(s) * np.sin(s - x) * np.sin(s - y) * np.sin(s - z)
+    return value
 
 
 def solve_3x3_rows(
@@ -489,7 +492,7 @@ def clear_centre(preferred: ArrayLike, points: ArrayLike) -> Array:
     for tilt in np.radians(_TILTS):
         for bearing in np.radians(np.arange(0.0, 360.0, 45.0)):
             way = np.cos(bearing) * east + np.sin(bearing) * up
-            trial = np.cos(tilt) * c + np.sin(tilt) * way
+            trial: Array = np.cos(tilt) * c + np.sin(tilt) * way
             gap = clearance(trial)
             if gap >= CLEAR:
                 return trial

@@ -1,5 +1,11 @@
 """Reading and writing mechanism documents (TOML and JSON), the bundled examples, and exports
-(CSV paths, SVG and DXF drawings)."""
+(CSV paths, SVG and DXF drawings).
+
+:mod:`.documents` is the schema (derived from the family registry) and the reading of a
+document's mapping; :mod:`.files` reads and writes the files and finds the examples;
+:mod:`.toml_writer` writes TOML; :mod:`.results` and :mod:`.report` give what the command line
+and the workbench show (degrees, JSON, sentences).
+"""
 
 from linkwright.io.documents import (
     FAMILY_SPECS,
@@ -9,12 +15,8 @@ from linkwright.io.documents import (
     FamilySpec,
     FieldSpec,
     document_to_dict,
-    list_examples,
-    load_document,
-    load_example,
     mechanism_to_dict,
     parse_document,
-    save_document,
 )
 from linkwright.io.exports import (
     FORMATS,
@@ -29,6 +31,7 @@ from linkwright.io.exports import (
     joint_paths,
     topology,
 )
+from linkwright.io.files import list_examples, load_document, load_example, save_document
 
 __all__ = [
     "FAMILY_SPECS",

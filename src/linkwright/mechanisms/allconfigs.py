@@ -13,6 +13,7 @@ FG. One function answers every family: there is no second solver.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -197,7 +198,8 @@ def _per_slot(motion: Motion) -> Motion:
     shape = motion.valid.shape
     n = shape[-2] * shape[-1]
 
-    def merge(a: Array, trailing: bool) -> Array:
+    # Positions and flags alike.
+    def merge(a: NDArray[Any], trailing: bool) -> NDArray[Any]:
         return a.reshape(shape[:-2] + (n,) + (a.shape[-1:] if trailing else ()))
 
     return Motion(
@@ -240,7 +242,9 @@ def _signs(
     return out
 
 
-def _drop_repeats(pos: dict[str, Array], valid: NDArray[np.bool_], scale: Array) -> NDArray:
+def _drop_repeats(
+    pos: dict[str, Array], valid: NDArray[np.bool_], scale: Array
+) -> NDArray[np.bool_]:
     """Mark a configuration invalid where an earlier slot holds the same joints (two branches
     meeting at a limit position)."""
     joints = np.concatenate(list(pos.values()), axis=-1)  # (..., slots, all coordinates)
@@ -250,4 +254,5 @@ def _drop_repeats(pos: dict[str, Array], valid: NDArray[np.bool_], scale: Array)
     earlier = np.tril(np.ones((n, n), dtype=bool), k=-1)  # [j, i]: i < j
     with np.errstate(invalid="ignore"):
         same = (gap <= SAME_TOL * scale) & earlier
-    return valid & ~same.any(axis=-1)
+    distinct: NDArray[np.bool_] = valid & ~same.any(axis=-1)
+    return distinct

@@ -9,7 +9,7 @@ assembly choice.
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, is_dataclass, replace
-from typing import ClassVar
+from typing import Any, ClassVar, Self, TypeVar, dataclass_transform, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,9 +30,38 @@ __all__ = [
 Array = NDArray[np.float64]
 
 
-family_dataclass = dataclass(frozen=True, eq=False)
-"""The decorator every family uses: frozen, with :class:`Mechanism`'s value equality (a plain
-dataclass would compare arrays with ``==``, which has no single truth value)."""
+_Family = TypeVar("_Family")
+
+
+@dataclass_transform(frozen_default=True, eq_default=False)
+def family_dataclass(cls: type[_Family]) -> type[_Family]:
+    """The decorator every family uses: frozen, with :class:`Mechanism`'s value equality (a plain
+    dataclass would compare arrays with ``==``, which has no single truth value)."""
+    return dataclass(frozen=True, eq=False)(cls)
+
+
+class Dimension:
+    """The annotation of a family's numeric field: given as anything array-like, read back as
+    the read-only float array ``Mechanism.__post_init__`` made of it.
+
+    Only the type checker reads it (as a descriptor, whose ``__set__`` types the constructor's
+    argument and ``__get__`` the attribute); at run time the field is a plain dataclass field.
+    """
+
+    @overload
+    def __get__(self, obj: None, owner: type) -> Self: ...
+    @overload
+    def __get__(self, obj: object, owner: type) -> Array: ...
+    def __get__(self, obj: object, owner: type) -> Any:
+        raise NotImplementedError("Dimension is an annotation, never instantiated")
+
+    def __set__(self, obj: object, value: ArrayLike) -> None:
+        raise NotImplementedError("Dimension is an annotation, never instantiated")
+
+
+def dimension(default: ArrayLike) -> Any:
+    """A :class:`Dimension` field's default (typed ``Any`` so that a number may stand for it)."""
+    return default
 
 
 class PlanByInput:
@@ -60,6 +89,20 @@ class Mechanism:
     family and fields are, they hash accordingly, and a batch indexes and slices into
     mechanisms. Families are declared with :data:`family_dataclass` (a frozen dataclass that
     keeps this equality).
+
+    Examples
+    --------
+    >>> from linkwright import FourBar
+    >>> fb = FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=3, rocker=3.5)
+    >>> fb == FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=3, rocker=3.5)
+    True
+    >>> batch = FourBar(A0=[0, 0], B0=[4, 0], crank=[1, 2], coupler=3, rocker=3.5)
+    >>> len(batch), float(batch[1].crank)
+    (2, 2.0)
+    >>> fb.crank[...] = 2
+    Traceback (most recent call last):
+    ...
+    ValueError: assignment destination is read-only
     """
 
     family: ClassVar[str]
@@ -106,7 +149,7 @@ class Mechanism:
         except ValueError as exc:
             raise InvalidMechanism(f"dimension arrays do not broadcast together: {exc}") from None
 
-    def _check_pose(self, value: NDArray) -> None:
+    def _check_pose(self, value: Array) -> None:
         """A triad's pose index: a whole number below its pose count."""
         triads = self.plan.triads
         most = max((t.max_poses for t in triads), default=1)  # type: ignore[attr-defined]
@@ -143,11 +186,22 @@ class Mechanism:
     @property
     def scale(self) -> Array:
         """A characteristic size (the largest length), for relative tolerances."""
-        lengths = [np.asarray(getattr(self, n)) for n in self.length_fields]
-        return np.maximum.reduce(np.broadcast_arrays(*lengths)) if lengths else np.float64(1.0)
+        lengths = [np.asarray(getattr(self, n), dtype=float) for n in self.length_fields]
+        if not lengths:
+            return np.asarray(1.0)
+        largest: Array = np.maximum.reduce(np.broadcast_arrays(*lengths))
+        return largest
+
+    def residuals(self, motion: Motion) -> dict[str, Array]:
+        """Every constraint's error at each sample of ``motion``, divided by :attr:`scale`:
+        each family writes its own, from its constraints alone."""
+        raise NotImplementedError(f"{type(self).__name__} does not measure its constraints")
 
     def with_assembly(self, assembly: ArrayLike) -> Mechanism:
-        return replace(self, assembly=assembly)
+
+        # The base class declares no fields; every family that has an ``assembly`` gets it
+        # replaced (dataclasses.replace checks the name at run time).
+        return replace(self, **{"assembly": assembly})
 
     # -- a value: equality, hashing and batch indexing -------------------------------------------
 
@@ -157,6 +211,13 @@ class Mechanism:
         if type(other) is not type(self):
             return NotImplemented
         return _frozen(self) == _frozen(other)
+
+    def _repr_svg_(self) -> str | None:
+        # Jupyter's picture of the linkage, drawn by the plots: they sit above this layer, so
+        # the package root lends them through linkwright._display.
+        from linkwright._display import repr_svg
+
+        return repr_svg(self)
 
     def __hash__(self) -> int:
         return hash((type(self).__name__, _frozen(self)))
@@ -198,7 +259,8 @@ class Mechanism:
             if not isinstance(value, np.ndarray):
                 continue
             tail = value.shape[-1:] if f.name in self.point_fields else ()
-            changes[f.name] = np.broadcast_to(value, shape + tail)[index]  # type: ignore[index]
+            # index is whatever NumPy accepts (an integer, slice, index array or mask).
+            changes[f.name] = np.broadcast_to(value, shape + tail)[index]  # type: ignore[call-overload]
         return replace(self, **changes)
 
 
@@ -216,7 +278,7 @@ def _frozen(value: object) -> object:
     return value
 
 
-def _show(value: NDArray) -> str:
+def _show(value: Array) -> str:
     if value.ndim == 0:
         return repr(float(value))
     bad = value[~np.isfinite(value) | (value <= 0)] if value.size else value
@@ -228,6 +290,21 @@ def solve(mechanism: Mechanism, inputs: ArrayLike, *, order: int = 2) -> Motion:
 
     ``inputs`` has shape ``(samples,)`` or ``batch + (samples,)``. The mechanism's own assembly
     is used; samples where it cannot be assembled are masked (``motion.valid``).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        One linkage, or a batch (dimension arrays with a leading batch shape).
+    inputs : array_like
+        Input angles θ, radians.
+    order : int
+        Derivatives by θ to compute: 0 (positions), 1 (and velocities), 2 (and accelerations).
+
+    Returns
+    -------
+    Motion
+        Every joint's positions (and derivatives) at the inputs; ``valid`` masks the samples
+        where the linkage is assembled.
 
     Examples
     --------
@@ -258,6 +335,20 @@ def configurations(
     Returns ``[(branches, motion), ...]``: ``branches`` holds one value per branching step in
     plan order (a dyad's sign ±1, a triad's pose index 0 … 5, or 0 … 7 on the sphere); each
     motion's ``valid`` says where that configuration is real. Any family, any batch.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        One linkage or a batch; its own assembly choice is ignored.
+    inputs : array_like
+        Input angles θ, radians.
+    order : int
+        Derivatives by θ to compute (0, 1 or 2).
+
+    Returns
+    -------
+    list of (tuple of int, Motion)
+        Each combination of branches with its motion.
 
     Examples
     --------
@@ -302,6 +393,25 @@ def circuit(
     draw chords across the curve; see :func:`linkwright.engine.trace`. It costs a few
     milliseconds a mechanism, so batches keep the default.
 
+    Parameters
+    ----------
+    mechanism : Mechanism
+        One linkage or a batch.
+    samples : int
+        Samples along the circuit.
+    order : int
+        Derivatives by θ to compute (0, 1 or 2).
+    circuit : int
+        Which circuit, where the input rocks over several arcs (0 first).
+    spacing : {"input", "path"}
+        How samples are spaced (see above).
+
+    Returns
+    -------
+    Motion
+        The circuit's samples in the order the machine runs them; where the linkage cannot
+        be assembled at any input, every sample is invalid.
+
     Examples
     --------
     Driving the long link of a crank-rocker, the input swings over |θ| ≥ arccos(−11/28):
@@ -314,6 +424,11 @@ def circuit(
            132.717])
     >>> m.branches["B"]
     array([ 1.,  1.,  1.,  1., -1., -1., -1., -1.])
+
+    A linkage that cannot assemble has no circuit: every sample is invalid.
+
+    >>> bool(circuit(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3), 8).valid.any())
+    False
     """
     return trace(
         mechanism.plan,
@@ -335,6 +450,23 @@ def circuits(
     (each up and back, switching branch at its limits); none where it cannot be assembled. A
     linkage with a triad has its configurations followed rather than its assembly held: every
     circuit of every configuration (:func:`linkwright.engine.continuation.every_circuit`).
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        One linkage (a batch for families without a triad).
+    samples : int
+        Samples along each circuit.
+    order : int
+        Derivatives by θ to compute (0, 1 or 2).
+    spacing : {"input", "path"}
+        How samples are spaced (see :func:`circuit`).
+
+    Returns
+    -------
+    (InputArcs, list of Motion)
+        The input's arcs and one motion per circuit (none for a linkage that cannot be
+        assembled at any input).
 
     Examples
     --------
@@ -372,5 +504,36 @@ def input_range(mechanism: Mechanism, *, method: str = "auto") -> InputArcs:
 
     For a linkage with a triad, the arcs of its circuits (:func:`circuits`), one mechanism at a
     time; their limits are found to about 1e-10 rad.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        One linkage, or a batch (families without a triad).
+    method : {"auto", "numeric"}
+        ``"auto"`` uses each dyad's closed form where there is one; ``"numeric"`` always
+        brackets the roots of the dyads' discriminants (a cross-check).
+
+    Returns
+    -------
+    InputArcs
+        ``full`` where the input turns fully, ``never`` where it cannot be assembled at any
+        input, else the arcs ``lo`` … ``hi`` (radians) it rocks over.
+
+    Examples
+    --------
+    Driving the long link of a crank-rocker, its input rocks over |θ| ≥ arccos(−11/28)
+    (the law of cosines with A0 B at its longest, coupler + rocker):
+
+    >>> from linkwright.mechanisms import FourBar
+    >>> arcs = input_range(FourBar(A0=[0, 0], B0=[1, 0], crank=3.5, coupler=5, rocker=1))
+    >>> bool(arcs.full), int(arcs.count), np.degrees([arcs.lo[0], arcs.hi[0]]).round(3)
+    (False, 1, array([113.132, 246.868]))
+    >>> round(float(np.degrees(np.arccos(-11 / 28))), 3)
+    113.132
+
+    A linkage that cannot assemble:
+
+    >>> bool(input_range(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3)).never)
+    True
     """
     return input_arcs(mechanism.plan, mechanism.params(), points=mechanism.points, method=method)

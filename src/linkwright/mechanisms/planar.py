@@ -14,7 +14,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import Crank, DyadRRP, DyadRRR, Fixed, Motion, Plan, Rigid, Trammel
 from linkwright.geometry import plane
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism, family_dataclass
+from linkwright.mechanisms.base import (
+    Dimension,
+    InvalidMechanism,
+    Mechanism,
+    dimension,
+    family_dataclass,
+)
 from linkwright.mechanisms.registry import Family, FieldSpec, register
 
 __all__ = ["DoubleSlider", "FourBar", "GearedFiveBar", "SliderCrank"]
@@ -26,7 +32,9 @@ def _link_error(motion: Motion, a: str, b: str, length: Array) -> Array:
     return plane.norm(motion.positions[b] - motion.positions[a]) - np.asarray(length)[..., None]
 
 
-def _frame_error(motion: Motion, origin: str, toward: str, point: str, u, v) -> Array:
+def _frame_error(
+    motion: Motion, origin: str, toward: str, point: str, u: ArrayLike, v: ArrayLike
+) -> Array:
     """How far the traced point is from its place (u, v) in the frame origin→toward."""
     o, t, p = (motion.positions[k] for k in (origin, toward, point))
     return plane.frame_error(o, t, p, np.asarray(u)[..., None], np.asarray(v)[..., None])
@@ -39,16 +47,32 @@ class FourBar(Mechanism):
     Input θ is the angle of A − A0, counter-clockwise from +x. P sits at (u, v) in the coupler
     frame with origin A and x-axis along A→B (v to the left). ``assembly`` is the sign of
     (B0 − A) × (B − A). Joints: A0, B0, A, B, P.
+
+    Examples
+    --------
+    A crank-rocker; its coupler B stays at the coupler's and the rocker's lengths:
+
+    >>> import numpy as np
+    >>> from linkwright import solve
+    >>> fb = FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=3, rocker=3.5, u=1, v=0.5)
+    >>> B = solve(fb, [0.0, np.pi / 2]).positions["B"]
+    >>> np.allclose(np.hypot(*(B - [4, 0]).T), 3.5)
+    True
+
+    One whose links cannot reach (1 + 1 + 1 < 5) assembles at no input:
+
+    >>> bool(solve(FourBar(A0=[0, 0], B0=[5, 0], crank=1, coupler=1, rocker=1), [0.0]).valid.any())
+    False
     """
 
-    A0: ArrayLike
-    B0: ArrayLike
-    crank: ArrayLike
-    coupler: ArrayLike
-    rocker: ArrayLike
-    u: ArrayLike = 0.0
-    v: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
+    A0: Dimension
+    B0: Dimension
+    crank: Dimension
+    coupler: Dimension
+    rocker: Dimension
+    u: Dimension = dimension(0.0)
+    v: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "fourbar"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0"})
@@ -97,16 +121,31 @@ class SliderCrank(Mechanism):
     The slider's line passes through ``line_point`` at ``line_angle`` (radians). P sits at (u, v)
     in the rod frame (origin A, x along A→B). ``assembly`` is the sign of (B − H)·d, H the foot
     of A on the line and d its direction. Joints: A0, A, B, P.
+
+    Examples
+    --------
+    An in-line slider-crank at θ = 0: the slider sits at crank + rod along the line:
+
+    >>> from linkwright import solve
+    >>> sc = SliderCrank(A0=[0, 0], crank=1, rod=3, line_point=[0, 0], line_angle=0)
+    >>> solve(sc, [0.0]).positions["B"].round(12).tolist()
+    [[4.0, 0.0]]
+
+    A rod shorter than the line's offset never reaches it:
+
+    >>> far = SliderCrank(A0=[0, 0], crank=1, rod=1, line_point=[0, 5], line_angle=0)
+    >>> bool(solve(far, [0.0, 1.0]).valid.any())
+    False
     """
 
-    A0: ArrayLike
-    crank: ArrayLike
-    rod: ArrayLike
-    line_point: ArrayLike = (0.0, 0.0)
-    line_angle: ArrayLike = 0.0
-    u: ArrayLike = 0.0
-    v: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
+    A0: Dimension
+    crank: Dimension
+    rod: Dimension
+    line_point: Dimension = dimension((0.0, 0.0))
+    line_angle: Dimension = dimension(0.0)
+    u: Dimension = dimension(0.0)
+    v: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "slidercrank"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "line_point"})
@@ -178,18 +217,18 @@ class GearedFiveBar(Mechanism):
     A→B: the midpoint (2, 0) plus √(9 − 5) = 2 along the unit normal (2, 4)/√20.
     """
 
-    A0: ArrayLike
-    B0: ArrayLike
-    crank1: ArrayLike
-    crank2: ArrayLike
-    link1: ArrayLike
-    link2: ArrayLike
-    phase1: ArrayLike = 0.0
-    phase2: ArrayLike = 0.0
-    ratio: ArrayLike = -1.0
-    u: ArrayLike = 0.0
-    v: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
+    A0: Dimension
+    B0: Dimension
+    crank1: Dimension
+    crank2: Dimension
+    link1: Dimension
+    link2: Dimension
+    phase1: Dimension = dimension(0.0)
+    phase2: Dimension = dimension(0.0)
+    ratio: Dimension = dimension(-1.0)
+    u: Dimension = dimension(0.0)
+    v: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "geared-fivebar"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0"})
@@ -311,12 +350,12 @@ class DoubleSlider(Mechanism):
            [ 0.,  1.]])
     """
 
-    M: ArrayLike
-    alpha: ArrayLike
-    beta: ArrayLike
-    p: ArrayLike
-    q: ArrayLike
-    h: ArrayLike = 0.0
+    M: Dimension
+    alpha: Dimension
+    beta: Dimension
+    p: Dimension
+    q: Dimension
+    h: Dimension = dimension(0.0)
 
     family: ClassVar[str] = "doubleslider"
     point_fields: ClassVar[frozenset[str]] = frozenset({"M"})

@@ -51,13 +51,20 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from linkwright.engine import Crank, DyadRRR, Fixed, Motion, Plan, Rigid
-from linkwright.engine.plan import Step
+from linkwright.engine.plan import Param, Step
 from linkwright.engine.triad_steps import Triad
 from linkwright.geometry import plane
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism, PlanByInput, family_dataclass
+from linkwright.mechanisms.base import (
+    Dimension,
+    InvalidMechanism,
+    Mechanism,
+    PlanByInput,
+    dimension,
+    family_dataclass,
+)
 from linkwright.mechanisms.planar import (
     ASSEMBLY_FIELD,
     FOURBAR_FIELDS,
@@ -97,10 +104,17 @@ def _length(motion: Motion, a: str, b: str) -> Array:
     return plane.norm(motion.positions[b] - motion.positions[a])
 
 
+def _named(p: Param) -> str:
+    """A step's parameter by name: a family's plan names every one (no step holds a constant)."""
+    if not isinstance(p, str):
+        raise TypeError(f"a six-bar's plan step holds the constant {p!r}, not a named parameter")
+    return p
+
+
 def _frame_error(motion: Motion, step: Rigid, params: dict[str, Array]) -> Array:
     """Distance of a rigid point from its place (u, v) in the frame origin→toward."""
     o, t, p = (motion.positions[k] for k in (step.origin, step.toward, step.name))
-    u, v = (np.asarray(params[k], dtype=float)[..., None] for k in (step.u, step.v))
+    u, v = (np.asarray(params[_named(k)], dtype=float)[..., None] for k in (step.u, step.v))
     return plane.frame_error(o, t, p, u, v)
 
 
@@ -117,11 +131,18 @@ class SixBar(Mechanism):
     attached: ClassVar[dict[str, tuple[str, str]]] = {}
 
     if TYPE_CHECKING:  # fields every family declares (not fields of this base)
-        A0: ArrayLike
-        B0: ArrayLike
-        crank: ArrayLike
-        link2: ArrayLike
-        assembly2: ArrayLike
+        # Read-only properties here, not annotations: an annotation would be a dataclass field
+        # of this base, ahead of (and out of order with) each family's own.
+        @property
+        def A0(self) -> Array: ...
+        @property
+        def B0(self) -> Array: ...
+        @property
+        def crank(self) -> Array: ...
+        @property
+        def link2(self) -> Array: ...
+        @property
+        def assembly2(self) -> Array: ...
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -152,14 +173,15 @@ class SixBar(Mechanism):
         for name, (origin, toward) in self.attached.items():
             step = self._steps()[name]
             assert isinstance(step, Rigid)  # an attached joint is a rigid point of its link
-            u, v = (np.asarray(params[k], dtype=float) for k in (step.u, step.v))
+            u, v = (np.asarray(params[_named(k)], dtype=float) for k in (step.u, step.v))
             side = self._link_length(origin, toward)
             sizes += [np.hypot(u, v), np.hypot(u - side, v)]
         points = [np.asarray(params[p], dtype=float) for p in self.ground]
         for i, p in enumerate(points):
             for q in points[i + 1 :]:
                 sizes.append(plane.norm(q - p))
-        return np.maximum.reduce(np.broadcast_arrays(*sizes))
+        largest: Array = np.maximum.reduce(np.broadcast_arrays(*sizes))
+        return largest
 
     def _link_length(self, origin: str, toward: str) -> Array:
         lengths = {("A0", "A"): "crank", ("A", "B"): "coupler", ("B0", "B"): "rocker"}
@@ -188,12 +210,12 @@ class SixBar(Mechanism):
                 at = np.asarray(params[step.at], dtype=float)[..., None, :]
                 ground.append(plane.norm(motion.positions[step.name] - at))
             elif isinstance(step, Crank):
-                out[step.length] = (
-                    _length(motion, step.pivot, step.name) - params[step.length][..., None]
-                )
+                length = _named(step.length)
+                out[length] = _length(motion, step.pivot, step.name) - params[length][..., None]
             elif isinstance(step, DyadRRR):
-                for pivot, r in ((step.p1, step.r1), (step.p2, step.r2)):
+                for pivot, r in ((step.p1, _named(step.r1)), (step.p2, _named(step.r2))):
                     out[r] = _length(motion, pivot, step.name) - params[r][..., None]
+
             elif isinstance(step, Rigid):
                 out[step.name] = _frame_error(motion, step, params)
         out["ground"] = np.maximum.reduce(ground)
@@ -251,21 +273,21 @@ class Watt1(SixBar):
     {'C': [1.0, 1.0], 'E': [1.0, 5.0], 'D': [-2.0, 1.0], 'P': [-0.5, 2.0]}
     """
 
-    A0: ArrayLike
-    B0: ArrayLike
-    crank: ArrayLike
-    coupler: ArrayLike
-    rocker: ArrayLike
-    u1: ArrayLike
-    v1: ArrayLike
-    u2: ArrayLike
-    v2: ArrayLike
-    link1: ArrayLike
-    link2: ArrayLike
-    u: ArrayLike = 0.0
-    v: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
-    assembly2: ArrayLike = 1.0
+    A0: Dimension
+    B0: Dimension
+    crank: Dimension
+    coupler: Dimension
+    rocker: Dimension
+    u1: Dimension
+    v1: Dimension
+    u2: Dimension
+    v2: Dimension
+    link1: Dimension
+    link2: Dimension
+    u: Dimension = dimension(0.0)
+    v: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
+    assembly2: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "watt1"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0"})
@@ -341,20 +363,20 @@ class Watt2(SixBar):
     {'C': [2.0, 4.0], 'D': [5.0, 4.0], 'P': [3.5, 5.0]}
     """
 
-    A0: ArrayLike
-    B0: ArrayLike
-    D0: ArrayLike
-    crank: ArrayLike
-    coupler: ArrayLike
-    rocker: ArrayLike
-    u1: ArrayLike
-    v1: ArrayLike
-    link1: ArrayLike
-    link2: ArrayLike
-    u: ArrayLike = 0.0
-    v: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
-    assembly2: ArrayLike = 1.0
+    A0: Dimension
+    B0: Dimension
+    D0: Dimension
+    crank: Dimension
+    coupler: Dimension
+    rocker: Dimension
+    u1: Dimension
+    v1: Dimension
+    link1: Dimension
+    link2: Dimension
+    u: Dimension = dimension(0.0)
+    v: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
+    assembly2: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "watt2"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0", "D0"})
@@ -429,21 +451,21 @@ class Stephenson1(SixBar):
     {'C': [1.0, -1.0], 'E': [5.0, 5.0], 'D': [5.0, -1.0], 'P': [3.0, 0.0]}
     """
 
-    A0: ArrayLike
-    B0: ArrayLike
-    crank: ArrayLike
-    coupler: ArrayLike
-    rocker: ArrayLike
-    u1: ArrayLike
-    v1: ArrayLike
-    u2: ArrayLike
-    v2: ArrayLike
-    link1: ArrayLike
-    link2: ArrayLike
-    u: ArrayLike = 0.0
-    v: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
-    assembly2: ArrayLike = 1.0
+    A0: Dimension
+    B0: Dimension
+    crank: Dimension
+    coupler: Dimension
+    rocker: Dimension
+    u1: Dimension
+    v1: Dimension
+    u2: Dimension
+    v2: Dimension
+    link1: Dimension
+    link2: Dimension
+    u: Dimension = dimension(0.0)
+    v: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
+    assembly2: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "stephenson1"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0"})
@@ -543,22 +565,22 @@ class Stephenson3(SixBar):
     True
     """
 
-    A0: ArrayLike
-    B0: ArrayLike
-    D0: ArrayLike
-    crank: ArrayLike
-    coupler: ArrayLike
-    rocker: ArrayLike
-    u1: ArrayLike
-    v1: ArrayLike
-    link1: ArrayLike
-    link2: ArrayLike
-    u: ArrayLike = 0.0
-    v: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
-    assembly2: ArrayLike = 1.0
+    A0: Dimension
+    B0: Dimension
+    D0: Dimension
+    crank: Dimension
+    coupler: Dimension
+    rocker: Dimension
+    u1: Dimension
+    v1: Dimension
+    link1: Dimension
+    link2: Dimension
+    u: Dimension = dimension(0.0)
+    v: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
+    assembly2: Dimension = dimension(1.0)
     input: str = "crank"
-    pose: ArrayLike = 0.0
+    pose: Dimension = dimension(0.0)
 
     family: ClassVar[str] = "stephenson3"
     point_fields: ClassVar[frozenset[str]] = frozenset({"A0", "B0", "D0"})

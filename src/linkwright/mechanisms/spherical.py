@@ -30,7 +30,14 @@ from numpy.typing import ArrayLike, NDArray
 from linkwright.engine import Fixed, Motion, Plan, SphereCrank, SphereDyad, SphereRigid
 from linkwright.engine.triad_steps import SphereTriad
 from linkwright.geometry import sphere
-from linkwright.mechanisms.base import InvalidMechanism, Mechanism, PlanByInput, family_dataclass
+from linkwright.mechanisms.base import (
+    Dimension,
+    InvalidMechanism,
+    Mechanism,
+    PlanByInput,
+    dimension,
+    family_dataclass,
+)
 from linkwright.mechanisms.registry import Family, FieldSpec, register
 
 __all__ = ["SphericalFourBar", "SphericalSixBar", "SphericalStephenson3"]
@@ -43,15 +50,21 @@ _Z = np.array([0.0, 0.0, 1.0])
 
 def _on_equator(angle: ArrayLike) -> Array:
     a = np.asarray(angle, dtype=float)
-    return np.stack(np.broadcast_arrays(np.cos(a), np.sin(a), np.zeros_like(a)), axis=-1)
+    axis: Array = np.stack(np.broadcast_arrays(np.cos(a), np.sin(a), np.zeros_like(a)), axis=-1)
+    return axis
 
 
 def _arc_error(motion: Motion, a: str, b: str, length: ArrayLike) -> Array:
     """Arc between two joints minus its length (radians)."""
-    return sphere.arc(motion.positions[a], motion.positions[b]) - np.asarray(length)[..., None]
+    error: Array = (
+        sphere.arc(motion.positions[a], motion.positions[b]) - np.asarray(length)[..., None]
+    )
+    return error
 
 
-def _point_error(motion: Motion, origin: str, toward: str, point: str, arc, angle) -> Array:
+def _point_error(
+    motion: Motion, origin: str, toward: str, point: str, arc: ArrayLike, angle: ArrayLike
+) -> Array:
     o, t, p = (motion.positions[k] for k in (origin, toward, point))
     return sphere.frame_error(o, t, p, np.asarray(arc)[..., None], np.asarray(angle)[..., None])
 
@@ -59,7 +72,8 @@ def _point_error(motion: Motion, origin: str, toward: str, point: str, arc, angl
 def _unit_error(motion: Motion) -> Array:
     """Largest departure of any joint from the unit sphere."""
     errs = [np.abs(sphere.norm(p) - 1.0) for p in motion.positions.values()]
-    return np.maximum.reduce(errs)
+    worst: Array = np.maximum.reduce(errs)
+    return worst
 
 
 @family_dataclass
@@ -92,13 +106,13 @@ class SphericalFourBar(Mechanism):
     (array([False]), array([[nan, nan, nan]]))
     """
 
-    frame: ArrayLike
-    crank: ArrayLike
-    coupler: ArrayLike
-    rocker: ArrayLike
-    point_arc: ArrayLike = 0.0
-    point_angle: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
+    frame: Dimension
+    crank: Dimension
+    coupler: Dimension
+    rocker: Dimension
+    point_arc: Dimension = dimension(0.0)
+    point_angle: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "spherical-fourbar"
     arc_fields: ClassVar[tuple[str, ...]] = ("frame", "crank", "coupler", "rocker")
@@ -155,22 +169,42 @@ class SphericalSixBar(Mechanism):
     the four-bar's mode ``assembly = -1`` (either ``assembly2``); the other three choices of
     (sign of ε, assembly) make the crank a rocker (``linkwright papers 000`` shows all four).
     Its mirror image in the frame plane (every angle and sign negated) is the same motion.
+
+    Examples
+    --------
+    Paper 000's Fig. 8 six-bar (arcs in degrees converted): D stays on the unit sphere.
+
+    >>> import numpy as np
+    >>> from linkwright import solve
+    >>> d = np.radians
+    >>> six = SphericalSixBar(frame=d(35), crank=d(20), coupler=d(42), rocker=d(30),
+    ...     point_arc=d(72), point_angle=d(22), link5=d(45), link6=d(33), ground_arc=d(85),
+    ...     ground_angle=d(-30), d_arc=d(30), d_angle=d(75), assembly=-1)
+    >>> round(float(np.linalg.norm(solve(six, [0.0]).positions["D"][0])), 12)
+    1.0
+
+    Coupler and rocker arcs too short to span the frame: it assembles nowhere.
+
+    >>> import dataclasses
+    >>> bad = dataclasses.replace(six, coupler=d(5), rocker=d(5))
+    >>> bool(solve(bad, [0.0, 1.0]).valid.any())
+    False
     """
 
-    frame: ArrayLike
-    crank: ArrayLike
-    coupler: ArrayLike
-    rocker: ArrayLike
-    point_arc: ArrayLike
-    point_angle: ArrayLike
-    link5: ArrayLike
-    link6: ArrayLike
-    ground_arc: ArrayLike
-    ground_angle: ArrayLike
-    d_arc: ArrayLike = 0.0
-    d_angle: ArrayLike = 0.0
-    assembly: ArrayLike = 1.0
-    assembly2: ArrayLike = 1.0
+    frame: Dimension
+    crank: Dimension
+    coupler: Dimension
+    rocker: Dimension
+    point_arc: Dimension
+    point_angle: Dimension
+    link5: Dimension
+    link6: Dimension
+    ground_arc: Dimension
+    ground_angle: Dimension
+    d_arc: Dimension = dimension(0.0)
+    d_angle: Dimension = dimension(0.0)
+    assembly: Dimension = dimension(1.0)
+    assembly2: Dimension = dimension(1.0)
 
     family: ClassVar[str] = "spherical-sixbar"
     arc_fields: ClassVar[tuple[str, ...]] = (
@@ -246,21 +280,35 @@ class SphericalStephenson3(Mechanism):
     (:class:`~linkwright.engine.triad_steps.SphereTriad`) whose branch is ``pose``, 0 to 7, the
     index of the configuration in the order of paper 001's θ1 = ∠BAD at each input, from −180°
     to 180°. Joints: A, D, G, B, C, E, F (traced: E).
+
+    Examples
+    --------
+    Paper 001's example driven at FG has 8, 4 and 6 real configurations at θ6 = −90°, 0° and
+    120° (every pose of the triad, from :func:`~linkwright.mechanisms.configurations`):
+
+    >>> import numpy as np
+    >>> from linkwright import configurations
+    >>> d = np.radians
+    >>> fg = SphericalStephenson3(*d([71.1, 64.1, 68.6, 65.7, 69.0, 102.0, 74.1, 52.6, 19.7]),
+    ...                           input="FG")
+    >>> found = configurations(fg, d([-90, 0, 120]))
+    >>> sum(motion.valid.astype(int) for _, motion in found).tolist()
+    [8, 4, 6]
     """
 
-    a1: ArrayLike
-    a2: ArrayLike
-    a3: ArrayLike
-    a4: ArrayLike
-    a6: ArrayLike
-    sigma: ArrayLike
-    a7: ArrayLike
-    a8: ArrayLike
-    a9: ArrayLike
-    assembly: ArrayLike = 1.0
-    assembly2: ArrayLike = 1.0
+    a1: Dimension
+    a2: Dimension
+    a3: Dimension
+    a4: Dimension
+    a6: Dimension
+    sigma: Dimension
+    a7: Dimension
+    a8: Dimension
+    a9: Dimension
+    assembly: Dimension = dimension(1.0)
+    assembly2: Dimension = dimension(1.0)
     input: str = "AB"
-    pose: ArrayLike = 0.0
+    pose: Dimension = dimension(0.0)
 
     family: ClassVar[str] = "spherical-stephenson3"
     arc_fields: ClassVar[tuple[str, ...]] = ("a1", "a2", "a3", "a4", "a6", "a7", "a8", "a9")

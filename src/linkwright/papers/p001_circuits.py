@@ -159,10 +159,10 @@ def _figure(m: SphericalStephenson3, found: list[Circuit], joins: list[Join]) ->
                 )
             )
         )
-        y = float(np.degrees(theta1(m, c.motion.positions["B"][i])))
-        left.plot(join.input_deg, y, "D", ms=6, mfc="white", mec="k", zorder=5)
+        y_join = float(np.degrees(theta1(m, c.motion.positions["B"][i])))
+        left.plot(join.input_deg, y_join, "D", ms=6, mfc="white", mec="k", zorder=5)
         left.annotate(
-            str(n), (join.input_deg, y), xytext=(4, 4), textcoords="offset points", fontsize=8
+            str(n), (join.input_deg, y_join), xytext=(4, 4), textcoords="offset points", fontsize=8
         )
         q = sphere.lambert_azimuthal(c.motion.positions[traced][i], centre)
         right.plot(*q, "D", ms=6, mfc="white", mec="k", zorder=5)
@@ -171,8 +171,8 @@ def _figure(m: SphericalStephenson3, found: list[Circuit], joins: list[Join]) ->
         q = sphere.lambert_azimuthal(p[name], centre)
         right.plot(*q, "^", ms=8, mfc="0.35", mec="k", zorder=4)
         right.annotate(name, q, xytext=(5, -10), textcoords="offset points", fontsize=9)
-    for x in COUNT_INPUTS:
-        left.axvline(x, color="0.6", lw=0.8, ls=":")
+    for counted in COUNT_INPUTS:
+        left.axvline(counted, color="0.6", lw=0.8, ls=":")
     left.set_xlim(-180, 180)
     left.set_ylim(-180, 180)
     left.set_xticks(range(-180, 181, 45))

@@ -15,7 +15,7 @@ still turning fully: beyond it the linkage locks and only oscillates, which the 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -48,7 +48,7 @@ class StudyStep:
 
 
 def pivot_study(
-    drawing: dict[str, Sequence[float]] = DRAWING,
+    drawing: Mapping[str, Sequence[float]] = DRAWING,
     direction: Sequence[float] = DIRECTIONS["left"],
     *,
     step: float = STEP,
@@ -91,7 +91,7 @@ def pivot_study(
 
 
 def pivot_limit(
-    drawing: dict[str, Sequence[float]] = DRAWING,
+    drawing: Mapping[str, Sequence[float]] = DRAWING,
     direction: Sequence[float] = DIRECTIONS["left"],
     *,
     step: float = STEP,
@@ -134,7 +134,9 @@ def reproduce(out_dir: str | Path) -> list[Path]:
 
     fig = Figure(figsize=(8, 9), layout="constrained")
     FigureCanvasAgg(fig)
-    top, bottom = fig.subfigures(2, 1, height_ratios=(2.2, 1))
+    # squeeze=False: an array of subfigures, which the stubs type (a bare SubFigure may not be
+    # unpacked).
+    top, bottom = fig.subfigures(2, 1, squeeze=False, height_ratios=(2.2, 1))[:, 0]
     plot_linkage(original, title="Original configuration (ratio −1)", ax=top.add_subplot())
     plot_speed(original, "P", ax=bottom.add_subplot())
     written.append(save_figure(fig, out / "p002-original.png"))

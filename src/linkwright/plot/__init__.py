@@ -6,6 +6,7 @@ so plotting works headless and from several threads.
 """
 
 from linkwright.plot.animation import AnimationError, animate
+from linkwright.plot.axes import AxesError
 from linkwright.plot.diagrams import KINDS, DiagramError, plot_diagram
 from linkwright.plot.planar import (
     draw_linkage,
@@ -19,6 +20,7 @@ from linkwright.plot.view import PlotError, plot_mechanism
 __all__ = [
     "KINDS",
     "AnimationError",
+    "AxesError",
     "DiagramError",
     "PlotError",
     "animate",

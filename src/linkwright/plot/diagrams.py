@@ -39,7 +39,7 @@ from __future__ import annotations
 import itertools
 import math
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -72,19 +72,20 @@ from linkwright.mechanisms import (
 )
 from linkwright.mechanisms.registry import family_of
 from linkwright.mechanisms.sixbar import NoConstructionPlan, SixBar
+from linkwright.plot.axes import check_axes_list
 from linkwright.plot.planar import (
     CURVE_COLOR,
     GAMMA_COLOR,
     LIMIT_COLOR,
     MINUS,
     OTHER_COLOR,
-    _Circuit,
-    _circuits,
-    _deg,
-    _fmt,
-    _speed_limit,
-    _unwrap_finite,
+    TracedCircuit,
+    deg_text,
     new_figure,
+    num_text,
+    speed_limit,
+    traced_circuits,
+    unwrap_finite,
 )
 
 __all__ = ["KINDS", "DiagramError", "diagram_series", "plot_diagram"]
@@ -365,7 +366,7 @@ class _Leg:
 class _Run:
     """The traced circuits, their input axis (degrees) and how they split into legs."""
 
-    circuits: list[_Circuit]
+    circuits: list[TracedCircuit]
     x: list[Array]
     legs: list[_Leg]
     limits: list[float]
@@ -376,7 +377,7 @@ class _Run:
         return [v[c.closed()] for v, c in zip(values, self.circuits, strict=True)]
 
 
-def _legs(mechanism: Mechanism, circuits: list[_Circuit]) -> _Run:
+def _legs(mechanism: Mechanism, circuits: list[TracedCircuit]) -> _Run:
     arcs = input_range(mechanism)
     period = math.degrees(float(np.max(np.asarray(arcs.period))))
     xs: list[Array] = []
@@ -385,7 +386,7 @@ def _legs(mechanism: Mechanism, circuits: list[_Circuit]) -> _Run:
     for k, c in enumerate(circuits):
         m = c.motion
         closed = c.closed()
-        x = np.degrees(_unwrap_finite(m.input[closed].astype(float)))
+        x = np.degrees(unwrap_finite(m.input[closed].astype(float)))
         suffix = "" if k == 0 else f", circuit {k + 1}"
         if c.full:
             x[-1] = x[0] + period
@@ -457,7 +458,7 @@ def _minmax(values: list[Array]) -> tuple[float, float] | None:
 def _clip_limit(panel: _Panel, run: _Run) -> float | None:
     """An upper limit for |values| that clips their growth next to the input's limits.
 
-    The rule of :func:`linkwright.plot.planar._speed_limit`, applied to the samples away from
+    The rule of :func:`linkwright.plot.planar.speed_limit`, applied to the samples away from
     the limits (the middle 80 % of each leg) plus the overall peak: the circuit's samples
     crowd towards the limits, where second derivatives grow like the distance to the limit to
     the power −3/2, so a percentile of all samples would measure the blow-up, not the curve.
@@ -475,7 +476,7 @@ def _clip_limit(panel: _Panel, run: _Run) -> float | None:
             inner.append(y[(x - lo >= margin) & (hi - x >= margin)])
             if np.isfinite(y).any():
                 peak = max(peak, float(np.nanmax(y)))
-    return _speed_limit([*inner, np.array([peak])])
+    return speed_limit([*inner, np.array([peak])])
 
 
 def _draw_panel(ax: Axes, panel: _Panel, run: _Run, *, unbounded: bool) -> None:
@@ -535,7 +536,7 @@ def _mark_limits(axes: list[Axes], run: _Run) -> None:
         for ax in axes:
             ax.axvline(at, color=LIMIT_COLOR, lw=0.8, ls=":", alpha=0.8, label="_limit")
         axes[0].annotate(
-            f"limit {_deg(at)}°",
+            f"limit {deg_text(at)}°",
             xy=(at, 1.0),
             xycoords=("data", "axes fraction"),
             xytext=(0, 3),
@@ -550,7 +551,7 @@ def _mark_limits(axes: list[Axes], run: _Run) -> None:
 def _continuous_degrees(angle: Array) -> Array:
     """An angle along a closed circuit, in degrees, without jumps: unwrapped (a turning link
     ends 360° on), then shifted by whole turns so that its range is centred in (−180°, 180°]."""
-    out = np.degrees(_unwrap_finite(angle))
+    out = np.degrees(unwrap_finite(angle))
     span = _minmax([out])
     if span is not None:
         mid = 0.5 * (span[0] + span[1])
@@ -567,8 +568,8 @@ def _deg_range(values: list[Array], name: str) -> str:
     if span is None:
         return f"{name}: not assembled"
     if span[1] - span[0] < 0.05:
-        return f"{name} constant, {_deg(span[0])}°"
-    return f"{name} from {_deg(span[0])}° to {_deg(span[1])}°"
+        return f"{name} constant, {deg_text(span[0])}°"
+    return f"{name} from {deg_text(span[0])}° to {deg_text(span[1])}°"
 
 
 # --------------------------------------------------------------------------------------------
@@ -600,13 +601,13 @@ def _angle_panels(mechanism: Mechanism, run: _Run, outs: _Outputs) -> tuple[list
                 note = (
                     f"{sym} turns fully"
                     if turned
-                    else f"{sym} from {_deg(span[0])}° to {_deg(span[1])}° "
-                    f"(swing {_deg(span[1] - span[0])}°)"
+                    else f"{sym} from {deg_text(span[0])}° to {deg_text(span[1])}° "
+                    f"(swing {deg_text(span[1] - span[0])}°)"
                 )
             elif span is not None:
                 note = (
-                    f"{sym} from {_fmt(span[0])} to {_fmt(span[1])} "
-                    f"(stroke {_fmt(span[1] - span[0])})"
+                    f"{sym} from {num_text(span[0])} to {num_text(span[1])} "
+                    f"(stroke {num_text(span[1] - span[0])})"
                 )
         if unit == "angle":
             ylabel = f"output angle {outs.symbol} (°)" if outs.single else "link angle ψ (°)"
@@ -663,7 +664,7 @@ def _angle_panels(mechanism: Mechanism, run: _Run, outs: _Outputs) -> tuple[list
                 )
             )
             details += (
-                f"; ν_n, ν_τ: paper 003's pressure-angle components at μ = OB/OA = {_fmt(mu)} "
+                f"; ν_n, ν_τ: paper 003's pressure-angle components at μ = OB/OA = {num_text(mu)} "
                 "(balanced μ, analysis.balanced_mu)"
             )
         else:
@@ -848,9 +849,9 @@ def _coefficient_panels(
     ):
         name = d.split(" = ")[0]
         top = co[key]
-        extra = [f"max |{name}| = {_fmt(top)} (exact, paper 003 eq. 4)"]
+        extra = [f"max |{name}| = {num_text(top)} (exact, paper 003 eq. 4)"]
         if key == "K_omega" and double:
-            extra.append(f"δ = max φ3′ − min φ3′ = {_fmt(co['delta'])}")
+            extra.append(f"δ = max φ3′ − min φ3′ = {num_text(co['delta'])}")
         panel = _Panel(
             f"{d} (dimensionless)",
             [_Series(name, values, color)],
@@ -867,10 +868,10 @@ def _coefficient_panels(
         )
     else:
         span = "stroke" if slider else "Ψ"
-        psi = _fmt(co["psi"]) if slider else f"{_deg(math.degrees(co['psi']))}°"
+        psi = num_text(co["psi"]) if slider else f"{deg_text(math.degrees(co['psi']))}°"
         what = (
             f"paper 003's coefficients of the output (eq. 3), φΨ = "
-            f"{_deg(math.degrees(co['phi_psi']))}°, {span} = {psi}; right axes: the analogues"
+            f"{deg_text(math.degrees(co['phi_psi']))}°, {span} = {psi}; right axes: the analogues"
         )
     return panels, what, True
 
@@ -894,10 +895,10 @@ HEADLINES = {
 }
 
 
-def _trace(mechanism: Mechanism, samples: int) -> list[_Circuit]:
+def _trace(mechanism: Mechanism, samples: int) -> list[TracedCircuit]:
     name = type(mechanism).__name__
     try:
-        circuits = _circuits(mechanism, samples, order=2)
+        circuits = traced_circuits(mechanism, samples, order=2)
     except NoConstructionPlan as exc:
         raise DiagramError(
             f"{name} has no construction plan to trace, so its motion diagrams are not "
@@ -1013,7 +1014,12 @@ def diagram_series(
 
 
 def plot_diagram(
-    mechanism: Mechanism, kind: str, *, samples: int = 720, title: str | None = None
+    mechanism: Mechanism,
+    kind: str,
+    *,
+    samples: int = 720,
+    title: str | None = None,
+    ax: Axes | Sequence[Axes] | None = None,
 ) -> Figure:
     """One kind of motion diagram of a linkage, against the input angle over its whole circuit.
 
@@ -1061,11 +1067,15 @@ def plot_diagram(
         Samples per circuit (at least 8).
     title : str, optional
         The mechanism's name, put after the family name in the figure title.
+    ax : matplotlib.axes.Axes or sequence of them, optional
+        Draw into these flat axes, one per panel (a wrong count is refused in one line, giving
+        the count); the titles and legend then go on the axes, not the figure.
 
     Returns
     -------
     matplotlib.figure.Figure
-        Its panels, ``fig.axes``, share the input axis. Each plotted quantity's first line is
+        Its panels, ``fig.axes``, share the input axis (the given axes' figure when ``ax`` is
+        given). Each plotted quantity's first line is
         labelled with its name (the traced joint, ``"φ3"``, ``"s"``, ``"γ"``, ``"γ at D"``,
         ``"Kω"``, ``"Kε"``, ``"Kp"``, a link such as ``"D0–D"``); further legs of a rocking
         circuit are labelled ``"_<name> | <leg>"`` (kept out of the legend).
@@ -1102,8 +1112,12 @@ def plot_diagram(
     run = _legs(mechanism, _trace(mechanism, int(samples)))
     outs = _outputs(mechanism, run.circuits[0].motion)
     panels, details, paper = _panels(mechanism, kind, run, outs)
-    fig = new_figure((8.5, 1.6 + 2.55 * len(panels)))
-    axes = list(np.atleast_1d(fig.subplots(len(panels), 1, sharex=True)))
+    given = check_axes_list(ax, len(panels))
+    if given is None:
+        fig = new_figure((8.5, 1.6 + 2.55 * len(panels)))
+        axes = list(np.atleast_1d(fig.subplots(len(panels), 1, sharex=True)))
+    else:
+        fig, axes = given[0].figure, given
     for ax, panel in zip(axes, panels, strict=True):
         _draw_panel(ax, panel, run, unbounded=not run.full)
     _mark_limits(axes, run)
@@ -1117,7 +1131,7 @@ def plot_diagram(
         axes[-1].set_xticks(start + np.arange(0.0, run.period_deg + 1e-9, step))
     else:
         arcs = ", ".join(
-            f"[{_deg(float(np.nanmin(x)))}°, {_deg(float(np.nanmax(x)))}°]" for x in run.x
+            f"[{deg_text(float(np.nanmin(x)))}°, {deg_text(float(np.nanmax(x)))}°]" for x in run.x
         )
         # A triad has no branch sign: at its limits two of its configurations meet.
         turn = "two configurations meet" if mechanism.plan.triads else "a dyad changes branch"
@@ -1127,9 +1141,12 @@ def plot_diagram(
             Line2D([], [], color="0.2", ls=BACK_STYLE, lw=1.6, label="back (θ decreasing)"),
             Line2D([], [], color=LIMIT_COLOR, ls=":", lw=0.8, label="input limit position"),
         ]
-        fig.legend(
-            handles=handles, loc="outside lower center", ncols=3, fontsize=8.5, frameon=False
-        )
+        if given is None:
+            fig.legend(
+                handles=handles, loc="outside lower center", ncols=3, fontsize=8.5, frameon=False
+            )
+        else:
+            axes[-1].legend(handles=handles, loc="best", fontsize=7)
     if outs.skipped:
         lines.append(
             f"links with no ground pivot ({', '.join(outs.skipped)}) have no single angle on "
@@ -1147,5 +1164,8 @@ def plot_diagram(
             what = "kinematic analogues of the moving links (derivatives by the input angle)"
     if kind == "angles" and not outs.single:
         what = "link positions and transmission angles"
-    fig.suptitle(f"{head}\n{what} against the input angle", fontsize=12)
+    if given is None:
+        fig.suptitle(f"{head}\n{what} against the input angle", fontsize=12)
+    else:
+        axes[0].set_title(f"{head}: {what}\n{subtitle}", fontsize=8.5, color=NOTE_COLOR)
     return fig

@@ -35,13 +35,15 @@ import math
 import numbers
 
 import numpy as np
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from linkwright.engine import InputArcs, input_arcs
 from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, input_range, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
+from linkwright.plot.axes import check_axes
 from linkwright.plot.generic import plot_linkage
-from linkwright.plot.planar import _deg, plot_curves
+from linkwright.plot.planar import deg_text, plot_curves
 from linkwright.plot.sphere import plot_spherical_mechanism
 
 __all__ = ["PlotError", "plot_mechanism"]
@@ -65,7 +67,7 @@ def range_text(arcs: InputArcs) -> str:
     if bool(arcs.full):
         return "every input"
     spans = [
-        f"[{_deg(math.degrees(lo))}°, {_deg(math.degrees(hi))}°]"
+        f"[{deg_text(math.degrees(lo))}°, {deg_text(math.degrees(hi))}°]"
         for lo, hi in zip(arcs.lo, arcs.hi, strict=True)
         if math.isfinite(lo)
     ]
@@ -84,7 +86,7 @@ def _elsewhere(mechanism: Mechanism) -> str:
     for signs in itertools.product((1.0, -1.0), repeat=len(names)):
         if signs == own:
             continue
-        trial = {**params, **{n: np.float64(s) for n, s in zip(names, signs, strict=True)}}
+        trial = {**params, **{n: np.asarray(s) for n, s in zip(names, signs, strict=True)}}
         if not bool(input_arcs(plan, trial, points=mechanism.points).never):
             found.append(
                 ", ".join(
@@ -106,6 +108,7 @@ def plot_mechanism(
     at: float | None = None,
     samples: int = 720,
     title: str | None = None,
+    ax: Axes | None = None,
 ) -> Figure:
     """The main picture of a linkage of any family: the linkage at ``at`` and its curves.
 
@@ -124,11 +127,16 @@ def plot_mechanism(
         Samples per circuit (at least 8).
     title : str, optional
         The figure's title (a document's ``title``).
+    ax : matplotlib.axes.Axes, optional
+        Draw into this flat axes (in a notebook's grid of subplots, say), the legend inside
+        it; a spherical linkage then gets its sphere's orthographic view alone, without the
+        map. A 3-D axes, or anything not an axes, is refused in one line.
 
     Returns
     -------
     matplotlib.figure.Figure
-        One axes for a planar linkage; two for a spherical one (the sphere, then the map).
+        One axes for a planar linkage; two for a spherical one (the sphere, then the map);
+        ``ax.figure`` when ``ax`` is given.
 
     Raises
     ------
@@ -158,6 +166,16 @@ def plot_mechanism(
     cannot fold that short (dyad B: |A B0| = 0.5 < |coupler - rocker| = 4); it does for
     θ in [−106.1°, −64.1°] and [64.1°, 106.1°]
 
+    Into axes of one's own, side by side:
+
+    >>> from linkwright.plot import new_figure
+    >>> fig = new_figure((10, 4))
+    >>> left, right = fig.subplots(1, 2)
+    >>> plot_mechanism(crank_rocker, samples=90, ax=left) is fig
+    True
+    >>> plot_mechanism(rocking, samples=90, ax=right).axes[1].get_title().splitlines()[0]
+    'Four-bar'
+
     A linkage that closes nowhere cannot be drawn:
 
     >>> plot_mechanism(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3))
@@ -168,6 +186,7 @@ def plot_mechanism(
     """
     if not isinstance(mechanism, Mechanism):
         raise PlotError(f"mechanism: expected a linkwright Mechanism, got {mechanism!r}")
+    check_axes(ax)
     if (
         isinstance(samples, bool)
         or not isinstance(samples, numbers.Integral)
@@ -191,13 +210,13 @@ def plot_mechanism(
         if not bool(solve(mechanism, [at], order=0).valid[0]):
             why = mechanism.plan.unassembled(mechanism.params(), at, points=mechanism.points)
             raise PlotError(
-                f"at θ = {_deg(math.degrees(at))}° the linkage does not assemble on its own "
+                f"at θ = {deg_text(math.degrees(at))}° the linkage does not assemble on its own "
                 + ("assembly" if why is None else f"assembly: {why}")
                 + f"; it does for {range_text(input_range(mechanism))}"
             )
     samples = int(samples)
     if mechanism.space == "sphere":
-        return plot_spherical_mechanism(mechanism, samples=samples, at=at, title=title)
+        return plot_spherical_mechanism(mechanism, samples=samples, at=at, title=title, ax=ax)
     if isinstance(mechanism, FourBar | SliderCrank):
-        return plot_curves(mechanism, samples=samples, theta=at, title=title)
-    return plot_linkage(mechanism, samples=samples, at=at, title=title)
+        return plot_curves(mechanism, samples=samples, theta=at, title=title, ax=ax)
+    return plot_linkage(mechanism, samples=samples, at=at, title=title, ax=ax)

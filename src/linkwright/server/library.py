@@ -32,8 +32,6 @@ import os
 import re
 import sqlite3
 import time
-import tomllib
-import unicodedata
 from collections.abc import Mapping
 from contextlib import AbstractContextManager
 from pathlib import Path
@@ -45,10 +43,26 @@ from fastapi.responses import Response
 from pydantic import BaseModel, ConfigDict, Field
 from starlette.concurrency import run_in_threadpool
 
-from linkwright.io import document_to_dict, parse_document
-from linkwright.io.documents import dumps_toml
-from linkwright.server import limits, store
+from linkwright.server import store
 from linkwright.server.guard import attachment, shown_filename
+from linkwright.server.library_entries import (
+    FORMATS,
+    MAX_NAME,
+    MAX_TEXT,
+    LibraryConflict,
+    LibraryError,
+    LibraryNotFound,
+    check_format,
+    check_id,
+    check_name,
+    decode_text,
+    dumps_document,
+    file_text,
+    name_from_title,
+    parse_text,
+    sniff_format,
+    validated_document,
+)
 from linkwright.server.schema import DocumentBody, document_examples, examples
 
 __all__ = [
@@ -62,14 +76,6 @@ __all__ = [
     "router",
 ]
 
-MAX_NAME = limits.NAME.value
-"""Longest entry name, in characters (after stripping): :data:`linkwright.server.limits.NAME`."""
-
-MAX_TEXT = 2_000_000
-"""Longest document text :meth:`Library.import_text` reads, in characters."""
-
-FORMATS = ("toml", "json")
-"""Document file formats the library imports and exports."""
 
 _MEDIA_TYPES = {"toml": "application/toml", "json": "application/json"}
 
@@ -83,184 +89,9 @@ _TABLE = """CREATE TABLE IF NOT EXISTS entries (
     created REAL NOT NULL,
     modified REAL NOT NULL)"""
 _BUSY_SECONDS = 30.0
-# SQLite's INTEGER is 64-bit signed; a larger Python int cannot even be bound.
-_MAX_ID = 2**63 - 1
-# Characters a name may not hold: controls (tabs and newlines included), lone surrogates (they
-# cannot be stored as UTF-8) and the Unicode line and paragraph separators (a name is one line).
-_REFUSED_CATEGORIES = frozenset({"Cc", "Cs", "Zl", "Zp"})
-# Bidirectional controls (marks, embeddings, overrides, isolates): a right-to-left override
-# shows "report\u202egpj.exe" as "reportexe.jpg", so a name would read as what it is not.
-_BIDI_CONTROLS = frozenset(
-    [
-        "\u061c",
-        "\u200e",
-        "\u200f",
-        *map(chr, range(0x202A, 0x202F)),
-        *map(chr, range(0x2066, 0x206A)),
-    ]
-)
-# Characters that show nothing: formats (zero-width space, joiners), marks with nothing to
-# mark, spaces, and the blank fillers of Hangul and Braille. A name of only these looks empty.
-_INVISIBLE_CATEGORIES = frozenset({"Cf", "Mn", "Me", "Zs"})
-_BLANKS = frozenset("\u115f\u1160\u3164\uffa0\u2800")
+
+
 _SUFFIXED = re.compile(r"^(?P<base>.*) \((?P<n>[0-9]+)\)$")
-
-
-class LibraryError(ValueError):
-    """A library request is invalid: the message names the field and the problem."""
-
-
-class LibraryConflict(LibraryError):
-    """An entry with that name already exists (the workbench answers 409)."""
-
-
-class LibraryNotFound(LookupError):
-    """No library entry has that id (the workbench answers 404)."""
-
-    def __str__(self) -> str:
-        # KeyError-style quoting of the message would read oddly in {"error": ...}.
-        return str(self.args[0]) if self.args else "library: no such entry"
-
-
-# --------------------------------------------------------------------------------------------
-# Names, ids, formats, texts
-# --------------------------------------------------------------------------------------------
-
-
-def _check_name(name: Any, field: str = "name") -> str:
-    """The stored form of a name: NFC (so names that look the same are the same), stripped."""
-    if not isinstance(name, str):
-        raise LibraryError(f"{field}: must be a string, got {type(name).__name__}")
-    name = unicodedata.normalize("NFC", name).strip()
-    if not name:
-        raise LibraryError(f"{field}: must not be empty")
-    if len(name) > MAX_NAME:
-        raise LibraryError(f"{field}: {len(name)} characters, at most {MAX_NAME} allowed")
-    for ch in name:
-        if unicodedata.category(ch) in _REFUSED_CATEGORIES:
-            raise LibraryError(
-                f"{field}: contains U+{ord(ch):04X} (a control character or line break)"
-            )
-        if ch in _BIDI_CONTROLS:
-            raise LibraryError(
-                f"{field}: contains U+{ord(ch):04X} (a bidirectional control, which can make a "
-                "name read differently from what it is)"
-            )
-    if all(_invisible(ch) for ch in name):
-        raise LibraryError(f"{field}: shows nothing (only zero-width or format characters)")
-    return name
-
-
-def _invisible(ch: str) -> bool:
-    return unicodedata.category(ch) in _INVISIBLE_CATEGORIES or ch in _BLANKS
-
-
-def _name_from(title: str | None) -> str:
-    """A valid name made from a document title (or ``"untitled"``): controls and line breaks
-    become spaces, runs of white space one space, and the result is cut to the length limit."""
-    if not title:
-        return "untitled"
-    cleaned = "".join(
-        " " if unicodedata.category(ch) in _REFUSED_CATEGORIES else ch
-        for ch in title
-        if ch not in _BIDI_CONTROLS
-    )
-    cleaned = " ".join(unicodedata.normalize("NFC", cleaned).split())[:MAX_NAME].strip()
-    if all(_invisible(ch) for ch in cleaned):
-        return "untitled"
-    return cleaned
-
-
-def _check_id(entry_id: Any) -> int:
-    # Only plain decimal digits: int() would also read " 5", "+5", "5_0" and non-ASCII digits.
-    if isinstance(entry_id, str) and entry_id.isascii() and entry_id.isdigit():
-        value = int(entry_id)
-    elif isinstance(entry_id, int) and not isinstance(entry_id, bool):
-        value = entry_id
-    else:
-        raise LibraryNotFound(f"library: no entry with id {entry_id!r}")
-    if not 0 < value <= _MAX_ID:
-        raise LibraryNotFound(f"library: no entry with id {value}")
-    return value
-
-
-def _check_format(fmt: Any, field: str = "format") -> str:
-    if not isinstance(fmt, str) or fmt.lower().lstrip(".") not in FORMATS:
-        shown = fmt if isinstance(fmt, str) else type(fmt).__name__
-        raise LibraryError(f"{field}: expected 'toml' or 'json', got {shown!r}")
-    return fmt.lower().lstrip(".")
-
-
-def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in pairs:
-        if key in out:
-            # json keeps the last of two values silently; a document that says two things
-            # about one field is refused, as TOML refuses it.
-            raise LibraryError(f"duplicate key {key!r}")
-        out[key] = value
-    return out
-
-
-def _decode(text: Any, source: str) -> str:
-    """A document's text: bytes read as UTF-8, a byte-order mark dropped, the size checked."""
-    if isinstance(text, bytes | bytearray):
-        try:
-            text = bytes(text).decode("utf-8")
-        except UnicodeDecodeError as exc:
-            raise LibraryError(f"{source}: not UTF-8 text (byte {exc.start})") from None
-    if not isinstance(text, str):
-        raise LibraryError(f"{source}: must be text, got {type(text).__name__}")
-    if len(text) > MAX_TEXT:
-        raise LibraryError(f"{source}: {len(text):,} characters, over the {MAX_TEXT:,} allowed")
-    return text.removeprefix("\ufeff")
-
-
-def _parse_text(text: str, fmt: str, source: str) -> Any:
-    """The mapping a TOML or JSON document text holds; errors start with ``source``."""
-    if fmt == "toml":
-        try:
-            return tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise LibraryError(f"{source}: invalid TOML: {exc}") from None
-        except RecursionError:  # tomllib recurses once per nested array or inline table
-            raise LibraryError(f"{source}: invalid TOML: nested too deeply") from None
-        except ValueError:
-            raise LibraryError(f"{source}: invalid TOML: a number too long to read") from None
-    try:
-        return json.loads(text, object_pairs_hook=_no_duplicates)
-    except json.JSONDecodeError as exc:
-        where = f"(at line {exc.lineno}, column {exc.colno})"
-        raise LibraryError(f"{source}: invalid JSON: {exc.msg} {where}") from None
-    except LibraryError as exc:
-        raise LibraryError(f"{source}: invalid JSON: {exc}") from None
-    except RecursionError:
-        raise LibraryError(f"{source}: invalid JSON: nested too deeply") from None
-    except ValueError:  # an integer of more digits than Python converts
-        raise LibraryError(f"{source}: invalid JSON: a number too long to read") from None
-
-
-def _sniff(text: str) -> str:
-    # A TOML document cannot start with "{" (a key or a [table] comes first); JSON's must.
-    return "json" if text.lstrip()[:1] == "{" else "toml"
-
-
-def _validated(document: Any, source: str = "document") -> tuple[dict[str, Any], str, str | None]:
-    """(canonical mapping, family, title) of a document; LimitError for one over the request
-    limits, DocumentError naming the field."""
-    limits.check_document(document, source)
-    doc = parse_document(document, source=source)
-    return document_to_dict(doc), doc.family, doc.title
-
-
-def _file_text(document: Mapping[str, Any], fmt: str) -> str:
-    if fmt == "toml":
-        return dumps_toml(document)
-    return json.dumps(document, indent=2, ensure_ascii=False, allow_nan=False) + "\n"
-
-
-def _dumps(document: Mapping[str, Any]) -> str:
-    return json.dumps(document, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
 
 
 # --------------------------------------------------------------------------------------------
@@ -300,7 +131,8 @@ class Library:
     >>> lib.save("mine", doc)
     Traceback (most recent call last):
     ...
-    linkwright.server.library.LibraryConflict: name: an entry named 'mine' already exists (id 1)
+    linkwright.server.library_entries.LibraryConflict: name: an entry named 'mine' already exists
+    (id 1)
     >>> lib.rename(1, "  Grashof  ")["name"]
     'Grashof'
     >>> [(e["id"], e["name"]) for e in lib.list()]
@@ -312,7 +144,7 @@ class Library:
     >>> lib.get(1)
     Traceback (most recent call last):
     ...
-    linkwright.server.library.LibraryNotFound: library: no entry with id 1
+    linkwright.server.library_entries.LibraryNotFound: library: no entry with id 1
     """
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
@@ -409,7 +241,7 @@ class Library:
         cur = conn.execute(
             "INSERT INTO entries (name, document, family, title, created, modified)"
             " VALUES (?, ?, ?, ?, ?, ?)",
-            (name, _dumps(document), family, title, now, now),
+            (name, dumps_document(document), family, title, now, now),
         )
         return int(cur.lastrowid or 0)
 
@@ -442,8 +274,8 @@ class Library:
         DocumentError
             For an invalid document, naming the field.
         """
-        name = _check_name(name)
-        canonical, family, title = _validated(document)
+        name = check_name(name)
+        canonical, family, title = validated_document(document)
         with self._transaction(write=True) as conn:
             holder = self._holder(conn, name)
             if holder is not None and not overwrite:
@@ -455,7 +287,7 @@ class Library:
                 conn.execute(
                     "UPDATE entries SET document = ?, family = ?, title = ?, modified = ?"
                     " WHERE id = ?",
-                    (_dumps(canonical), family, title, time.time(), entry_id),
+                    (dumps_document(canonical), family, title, time.time(), entry_id),
                 )
             return self._entry(self._row(conn, entry_id))
 
@@ -469,13 +301,13 @@ class Library:
         DocumentError
             For an invalid document, naming the field.
         """
-        entry_id = _check_id(entry_id)
-        canonical, family, title = _validated(document)
+        entry_id = check_id(entry_id)
+        canonical, family, title = validated_document(document)
         with self._transaction(write=True) as conn:
             self._row(conn, entry_id)
             conn.execute(
                 "UPDATE entries SET document = ?, family = ?, title = ?, modified = ? WHERE id = ?",
-                (_dumps(canonical), family, title, time.time(), entry_id),
+                (dumps_document(canonical), family, title, time.time(), entry_id),
             )
             return self._entry(self._row(conn, entry_id))
 
@@ -491,8 +323,8 @@ class Library:
         LibraryNotFound
             If there is no such entry.
         """
-        entry_id = _check_id(entry_id)
-        name = _check_name(name)
+        entry_id = check_id(entry_id)
+        name = check_name(name)
         with self._transaction(write=True) as conn:
             row = self._row(conn, entry_id)
             if row["name"] != name:
@@ -531,7 +363,7 @@ class Library:
         LibraryNotFound
             If there is no such entry.
         """
-        entry_id = _check_id(entry_id)
+        entry_id = check_id(entry_id)
         with self._transaction(write=False) as conn:
             return self._entry(self._row(conn, entry_id))
 
@@ -543,7 +375,7 @@ class Library:
         LibraryNotFound
             If there is no such entry.
         """
-        entry_id = _check_id(entry_id)
+        entry_id = check_id(entry_id)
 
         def run() -> None:
             with self._transaction(write=True) as conn:
@@ -609,14 +441,14 @@ class Library:
         ...
         linkwright.io.documents.DocumentError: text: mechanism.rod: must be a positive number, got 0
         """
-        fmt = None if format is None else _check_format(format)
-        text = _decode(text, source)
-        mapping = _parse_text(text, fmt or _sniff(text), source)
-        canonical, family, title = _validated(mapping, source=source)
-        explicit = None if name is None else _check_name(name)
+        fmt = None if format is None else check_format(format)
+        text = decode_text(text, source)
+        mapping = parse_text(text, fmt or sniff_format(text), source)
+        canonical, family, title = validated_document(mapping, source=source)
+        explicit = None if name is None else check_name(name)
         with self._transaction(write=True) as conn:
             if explicit is None:
-                chosen = self._unique(conn, _name_from(title or default_name))
+                chosen = self._unique(conn, name_from_title(title or default_name))
             else:
                 holder = self._holder(conn, explicit)
                 if holder is not None:
@@ -637,7 +469,7 @@ class Library:
         LibraryNotFound
             If there is no such entry.
         """
-        return _file_text(self.get(entry_id)["document"], _check_format(format))
+        return file_text(self.get(entry_id)["document"], check_format(format))
 
 
 # --------------------------------------------------------------------------------------------
@@ -647,7 +479,7 @@ class Library:
 router = APIRouter()
 
 
-# The name's rule (NFC, stripped, no controls, at most MAX_NAME characters) is _check_name's; the
+# The name's rule (NFC, stripped, no controls, at most MAX_NAME characters) is check_name's; the
 # schema says the length, which the stripped name must keep.
 _NAME = Field(json_schema_extra={"minLength": 1, "maxLength": MAX_NAME})
 
@@ -773,22 +605,22 @@ async def import_route(
 
 @router.get("/library/{entry_id}")
 def get_route(entry_id: EntryId, request: Request) -> dict[str, Any]:
-    return _library(request).get(_check_id(entry_id))
+    return _library(request).get(check_id(entry_id))
 
 
 @router.patch("/library/{entry_id}")
 def rename_route(entry_id: EntryId, body: RenameRequest, request: Request) -> dict[str, Any]:
-    return _library(request).rename(_check_id(entry_id), body.name)
+    return _library(request).rename(check_id(entry_id), body.name)
 
 
 @router.put("/library/{entry_id}")
 def update_route(entry_id: EntryId, body: UpdateRequest, request: Request) -> dict[str, Any]:
-    return _library(request).update(_check_id(entry_id), body.document)
+    return _library(request).update(check_id(entry_id), body.document)
 
 
 @router.delete("/library/{entry_id}")
 def delete_route(entry_id: EntryId, request: Request) -> dict[str, Any]:
-    return {"deleted": _library(request).delete(_check_id(entry_id))}
+    return {"deleted": _library(request).delete(check_id(entry_id))}
 
 
 @router.get(
@@ -806,9 +638,9 @@ def export_route(
     request: Request,
     format: Annotated[str, Query(json_schema_extra={"enum": list(FORMATS)})] = "toml",
 ) -> Response:
-    fmt = _check_format(format)
-    entry = _library(request).get(_check_id(entry_id))
-    text = _file_text(entry["document"], fmt)
+    fmt = check_format(format)
+    entry = _library(request).get(check_id(entry_id))
+    text = file_text(entry["document"], fmt)
     return Response(
         text.encode("utf-8"),
         media_type=f"{_MEDIA_TYPES[fmt]}; charset=utf-8",

@@ -28,6 +28,7 @@ import orjson
 from linkwright.engine import cost
 from linkwright.engine.circuits import InputArcs, NoPeriod
 from linkwright.engine.plan import placed_joints
+from linkwright.engine.shared import share_arcs, share_samples
 from linkwright.geometry.sphere import clear_centre, lambert_azimuthal
 from linkwright.io import (
     FAMILY_SPECS,
@@ -404,6 +405,25 @@ def _map_centre(motions: list[Any], traced: list[str]) -> np.ndarray | None:
     return clear_centre(centre, np.concatenate(drawn))
 
 
+def _share_searches(mechanisms: list[Mechanism], samples: int | None) -> None:
+    """The assembly modes' limit searches done in one batch where the modes differ only in
+    their numbers, as sign fields make them: their arcs (``samples`` None) or their circuits'
+    samples (:func:`~linkwright.engine.circuits.share_samples`)."""
+    if len(mechanisms) < 2:
+        return
+    try:
+        plan, points = mechanisms[0].plan, mechanisms[0].points
+        if plan.triads or any(m.plan != plan or m.points != points for m in mechanisms):
+            return
+    except NoConstructionPlan:
+        return
+    linkages = [m.params() for m in mechanisms]
+    if samples is None:
+        share_arcs(plan, linkages, points=points)
+    else:
+        share_samples(plan, linkages, samples, points=points)
+
+
 def _planned(
     doc: Document, samples: int, diagrams: bool
 ) -> list[tuple[str, dict[str, int], Document, bool, InputArcs]]:
@@ -413,7 +433,9 @@ def _planned(
     out = []
     estimate: cost.Estimate | None = None
     numbers = 0.0
-    for label, signs, variant, own in _variants(doc):
+    variants = _variants(doc)
+    _share_searches([variant.mechanism for _, _, variant, _ in variants], None)
+    for label, signs, variant, own in variants:
         arcs, part, answer = budget.scene_part(variant.mechanism, samples, own and diagrams)
         estimate = part if estimate is None else estimate + part
         numbers += answer
@@ -556,6 +578,7 @@ def _scene(document: Any, *, samples: int, at: float | None, diagrams: bool) -> 
     traced_variants: list[tuple[str, dict[str, int], bool, Any, list[Any]]] = []
     try:
         planned = _planned(doc, samples, diagrams)
+        _share_searches([variant.mechanism for _, _, variant, _, _ in planned], samples)
         for label, signs, variant, own, arcs in planned:
             if variant.mechanism.plan.triads:
                 # Every circuit of every configuration, found together: the arcs count only

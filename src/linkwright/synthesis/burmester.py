@@ -31,6 +31,10 @@ real equations |Dj c − g|² = |c − g|² (Dj the displacement from pose 1 to 
 on the curves) and kept only where they hold to rounding: the complex route alone loses digits
 where poses nearly share a pole.
 
+Where the centre point goes to infinity the dyad is a slider (RP): those samples are invalid
+here, and the slider dyads (the slider-point circle of three poses, the Ball point of four) and
+the slider-cranks they make live in :mod:`linkwright.synthesis.slider_dyads`.
+
 References: L. Burmester, *Lehrbuch der Kinematik* (1888). G. N. Sandor and A. G. Erdman,
 *Advanced Mechanism Design* vol. 2 (Prentice-Hall 1984), §2.14–2.20. J. M. McCarthy and G. S.
 Soh, *Geometric Design of Linkages*, 2nd ed. (Springer 2011), ch. 5.
@@ -48,10 +52,10 @@ from scipy.optimize import brentq
 from linkwright.synthesis.precision import (
     MotionDesign,
     PrecisionError,
-    _first,
-    _pose_set,
-    _where,
+    batch_place,
+    first_true,
     fourbar_from_dyads,
+    pose_set,
 )
 
 __all__ = [
@@ -171,7 +175,7 @@ def four_pose_dyads(
     >>> np.degrees(np.arctan2(c[0, 0, 1], c[0, 0, 0])).round(9)
     np.float64(20.0)
     """
-    p, a, scale = _pose_set(points, angles, 4, "four_pose_dyads")
+    p, a, scale = pose_set(points, angles, 4, "four_pose_dyads")
     beta2 = np.asarray(beta2, dtype=float)
     if beta2.ndim == 0:
         beta2 = beta2[None]
@@ -404,6 +408,12 @@ def four_pose_fourbar(
     beta2 : (..., 2) β2 of the crank's dyad and of the rocker's (radians).
     closure : (..., 2) which closure (0 or 1, the first axis of :func:`four_pose_dyads`) each.
 
+    Returns
+    -------
+    MotionDesign
+        The four-bar (``.mechanism``), its residual ``.error`` at the poses and whether the
+        poses fall on different branches (``.branch_defect``).
+
     Raises
     ------
     PrecisionError : a β2 whose compatibility linkage does not close (no real dyad there), or
@@ -424,8 +434,8 @@ def four_pose_fourbar(
     >>> four_pose_fourbar(pts, ang, np.radians([60, 50]), [0, 0])
     Traceback (most recent call last):
     ...
-    linkwright.synthesis.precision.PrecisionError: four_pose_fourbar: no real dyad at β2 = 60°
-    (closure 0) for the crank: the compatibility linkage does not close there (or the dyad is a
+    linkwright.synthesis.precision_designs.PrecisionError: four_pose_fourbar: no real dyad at β2 =
+    60° (closure 0) for the crank: the compatibility linkage does not close there (or the dyad is a
     slider)
     """
     what = "four_pose_fourbar"
@@ -443,13 +453,14 @@ def four_pose_fourbar(
     pick = np.broadcast_to(closure, shape + (2,)).astype(int)
     valid = np.broadcast_to(valid, shape + (2, 2))
     ok = np.take_along_axis(valid, pick[..., None, :], -2)[..., 0, :]
-    at = _first(~ok)
+    at = first_true(~ok)
     if at is not None:
         k = at[-1]
         b = np.broadcast_to(beta2, shape + (2,))[at]
         raise PrecisionError(
             f"{what}: no real dyad at β2 = {np.degrees(b):.9g}° (closure {int(pick[at])}) for "
-            f"the {'crank' if k == 0 else 'rocker'}{_where(at[:-1])}: the compatibility linkage "
+            f"the {'crank' if k == 0 else 'rocker'}{batch_place(at[:-1])}: the compatibility "
+            "linkage "
             "does not close there (or the dyad is a slider)"
         )
 
@@ -665,7 +676,7 @@ def burmester_points(points: ArrayLike, angles: ArrayLike) -> BurmesterPoints:
     >>> float(bp.residual.max()) < 1e-12
     True
     """
-    p, a, scale = _pose_set(points, angles, 5, "burmester_points")
+    p, a, scale = pose_set(points, angles, 5, "burmester_points")
     delta, alpha = _normalised(p, a, scale)
     shape = p.shape[:-2]
     centres = np.full(shape + (4, 2), np.nan)
@@ -676,7 +687,8 @@ def burmester_points(points: ArrayLike, angles: ArrayLike) -> BurmesterPoints:
         found = _burmester_one(delta[idx], alpha[idx])
         if found is None:
             raise PrecisionError(
-                f"burmester_points: the poses{_where(idx)} only translate, or all turn about one "
+                f"burmester_points: the poses{batch_place(idx)} only translate, or all turn about "
+                "one "
                 "point: every body point has concyclic positions or none does, so the Burmester "
                 "points are not isolated"
             )
@@ -724,7 +736,7 @@ def burmester_fourbars(points: ArrayLike, angles: ArrayLike) -> tuple[MotionDesi
     Of the twelve, four meet the poses in order on one assembly: the four-bar itself (3, 1:
     crank A0A, rocker B0B) and three others.
     """
-    p, a, _ = _pose_set(points, angles, 5, "burmester_fourbars")
+    p, a, _ = pose_set(points, angles, 5, "burmester_fourbars")
     if p.ndim != 2:
         raise PrecisionError(
             f"burmester_fourbars: takes one set of five poses, got a batch of shape {p.shape[:-2]}"

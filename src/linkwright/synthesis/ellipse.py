@@ -626,6 +626,26 @@ def ellipse_synthesis(
     the ellipse over a turn, relative to a. ``progress`` (optional) is called with the fraction
     done.
 
+    Parameters
+    ----------
+    conic : array_like, shape (6,), optional
+        The ellipse's coefficients A..F.
+    points : array_like, shape (N, 2), optional
+        Points to fit an ellipse to.
+    family_samples : int
+        How many members of the one-parameter family of double sliders to return.
+    circle : {"small", "large"}
+        Which Cardan circle the family rolls.
+    samples : int
+        Samples of a turn in each deviation check.
+    progress : callable, optional
+        Called with the fraction done.
+
+    Returns
+    -------
+    dict
+        The keys above.
+
     Examples
     --------
     >>> r = ellipse_synthesis(conic=[1, 0, 9, 0, 0, -9], family_samples=2)

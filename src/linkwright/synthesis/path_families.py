@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from linkwright.mechanisms import (
     DyadJoint,
@@ -369,7 +369,9 @@ def _extremes(f: str, lo: Array, hi: Array) -> tuple[Array, Array]:
     return np.where(bottom, -1.0, np.minimum(ca, cb)), np.where(top, 1.0, np.maximum(ca, cb))
 
 
-def path_margin(model: Model, shape: Mapping[str, Array], lo: Array, hi: Array) -> Array | None:
+def path_margin(
+    model: Model, shape: Mapping[str, Array], lo: ArrayLike, hi: ArrayLike
+) -> Array | None:
     """The least closure margin of the dyad while the input sweeps [lo, hi] (from the frame
     line), exactly; negative where the linkage meets a limit position on the way. None for the
     geared five-bar, whose dyad has no such closed form (its path is sampled instead).
@@ -400,6 +402,7 @@ def path_margin(model: Model, shape: Mapping[str, Array], lo: Array, hi: Array) 
     """
     if model.family == "geared-fivebar":
         return None
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     if model.family == "slidercrank":
         r, l, e = shape["crank"], shape["rod"], shape["offset"]
         s_lo, s_hi, _ = np.broadcast_arrays(*_extremes("sin", lo, hi), r)

@@ -34,9 +34,8 @@ numbers are all replaced). The model has the same interface, so the search of
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -65,8 +64,23 @@ from linkwright.mechanisms import (
     solve,
 )
 from linkwright.mechanisms.parameters import ParameterError, family_template, parameter_vector
+from linkwright.synthesis.path_alignment import (
+    axis_rotation,
+    diameter,
+    nearest_fit,
+    nearest_turn,
+    paired_fit,
+    paired_turn,
+    rotation_pose,
+    turning_rotation,
+)
 from linkwright.synthesis.path_families import MODELS, Model
+from linkwright.synthesis.path_follow import CLEAR as CLEAR
+from linkwright.synthesis.path_follow import FOLLOW_GRID, Followed, follow
+from linkwright.synthesis.path_follow import JUMP as JUMP
 
+# A name imported `as` itself moved to a sibling module and is re-exported for older imports;
+# a constant among them is read where it lives (set it there, not here).
 __all__ = [
     "FOLLOW_GRID",
     "Followed",
@@ -77,35 +91,17 @@ __all__ = [
     "rotation_pose",
 ]
 
+
 Array = NDArray[np.float64]
 TWO_PI = 2.0 * np.pi
 
-FOLLOW_GRID = 40
-"""Samples a period of the input on which a triad's branch is followed between inputs."""
-CLEAR = 0.5
-"""A followed branch continues to its nearest configuration only while that is nearer than
-this fraction of the distance to the next nearest."""
-JUMP = 0.9
-"""A followed branch's next sample may lie off the line through its last two by at most this
-fraction of the step (a smooth branch: by about the step's square; a jump to another branch,
-where the branch ended at a limit position between two samples: by about the whole step)."""
+
 CHUNK_SAMPLES = 400_000
 """Mechanism-samples evaluated at once (bounds the memory of a large population)."""
 
 
 class ModelError(ValueError):
     """A family that has no search model as asked (one line: which, and what to give)."""
-
-
-@dataclass(frozen=True)
-class Followed:
-    """Positions on one configuration at each input, as a :class:`~linkwright.engine.Motion`
-    has them (``positions``, ``valid``, ``margins``), and the branch values used."""
-
-    positions: dict[str, Array]
-    valid: NDArray[np.bool_]
-    margins: dict[str, Array]
-    branches: dict[str, Array]
 
 
 def model_for(family: str, template: Mechanism | None = None) -> Model | GenericModel:
@@ -296,11 +292,11 @@ class GenericModel:
                 if not ok.all():
                     continue
                 if self.space == "plane":
-                    w, t, miss = _paired_fit(pts, targets)
+                    w, t, miss = paired_fit(pts, targets)
                     scaled = {q: v * abs(w) if q in self.linear else v for q, v in shape.items()}
                     seed = (np.array([t.real, t.imag, np.angle(w)]), scaled, float(code))
                 else:
-                    R, miss = _paired_turn(pts, targets)
+                    R, miss = paired_turn(pts, targets)
                     seed = (rotation_pose(R), shape, float(code))
                 found.append((miss, seed))
             found.sort(key=lambda item: item[0])
@@ -312,16 +308,18 @@ class GenericModel:
             for k in range(count):
                 spin = TWO_PI * k / count - np.pi
                 if self.space == "plane":
-                    size = _diameter(pts)
-                    w0 = (_diameter(targets) / size if size > 0 else 1.0) * np.exp(1j * spin)
-                    w, t, miss = _nearest_fit(pts, targets, w0)
+                    size = diameter(pts)
+                    w0 = (diameter(targets) / size if size > 0 else 1.0) * np.exp(1j * spin)
+                    w, t, miss = nearest_fit(pts, targets, w0)
                     scaled = {
                         q: val * abs(w) if q in self.linear else val for q, val in shape.items()
                     }
                     seed = (np.array([t.real, t.imag, np.angle(w)]), scaled, float(code))
                 else:
                     mc, mt = sphere.unit(pts.mean(axis=0)), sphere.unit(targets.mean(axis=0))
-                    R, miss = _nearest_turn(pts, targets, _about(mt, spin) @ _turning(mc, mt))
+                    R, miss = nearest_turn(
+                        pts, targets, axis_rotation(mt, spin) @ turning_rotation(mc, mt)
+                    )
                     seed = (rotation_pose(R), shape, float(code))
                 found.append((miss, seed))
         found.sort(key=lambda item: item[0])
@@ -547,90 +545,6 @@ class GenericModel:
         return replace(mech, **changes) if changes else mech
 
 
-def _diameter(pts: Array) -> float:
-    diff = pts[:, None, :] - pts[None, :, :]
-    return float(np.sqrt(np.max(np.sum(diff * diff, axis=-1))))
-
-
-def _paired_fit(points: Array, targets: Array) -> tuple[complex, complex, float]:
-    """The least-squares similarity z ↦ w·z + t (complex) of ``points`` onto ``targets``, pair
-    by pair, and its residual (in the points' units)."""
-    a = points[:, 0] + 1j * points[:, 1]
-    b = targets[:, 0] + 1j * targets[:, 1]
-    da, db = a - a.mean(), b - b.mean()
-    energy = float(np.sum(np.abs(da) ** 2))
-    w = complex(np.sum(np.conj(da) * db) / energy) if energy > 0 else 1.0 + 0j
-    t = b.mean() - w * a.mean()
-    return w, t, float(np.sum(np.abs(w * a + t - b) ** 2) / max(abs(w), 1e-300) ** 2)
-
-
-def _paired_turn(points: Array, targets: Array) -> tuple[Array, float]:
-    """The rotation (Kabsch) of ``points`` onto ``targets``, pair by pair, and its residual."""
-    u, _, vt = np.linalg.svd(targets.T @ points)
-    R = u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
-    return R, float(np.sum((points @ R.T - targets) ** 2))
-
-
-def _nearest_fit(
-    curve: Array, targets: Array, w: complex, rounds: int = 12
-) -> tuple[complex, complex, float]:
-    """Iterated closest points: the similarity z ↦ w·z + t (complex) that lays the sampled
-    curve over the targets, each target matched to its nearest curve point, from ``w``."""
-    a = curve[:, 0] + 1j * curve[:, 1]
-    b = targets[:, 0] + 1j * targets[:, 1]
-    t = b.mean() - w * a.mean()
-    for _ in range(rounds):
-        near = a[np.argmin(np.abs((w * a + t)[None, :] - b[:, None]), axis=1)]
-        da, db = near - near.mean(), b - b.mean()
-        energy = float(np.sum(np.abs(da) ** 2))
-        if energy <= 0:
-            break
-        w = complex(np.sum(np.conj(da) * db) / energy)
-        t = b.mean() - w * near.mean()
-    miss = np.min(np.abs((w * a + t)[None, :] - b[:, None]), axis=1)
-    return w, t, float(np.sum(miss**2) / max(abs(w), 1e-300) ** 2)
-
-
-def _nearest_turn(curve: Array, targets: Array, R: Array, rounds: int = 12) -> tuple[Array, float]:
-    """The same on the sphere: the rotation (Kabsch) laying the curve over the targets."""
-    for _ in range(rounds):
-        moved = curve @ R.T
-        near = curve[np.argmin(np.sum((moved[None] - targets[:, None]) ** 2, axis=-1), axis=1)]
-        u, _, vt = np.linalg.svd(targets.T @ near)
-        d = np.sign(np.linalg.det(u @ vt))
-        R = u @ np.diag([1.0, 1.0, d]) @ vt
-    moved = curve @ R.T
-    return R, float(np.sum(np.min(np.sum((moved[None] - targets[:, None]) ** 2, axis=-1), axis=1)))
-
-
-def _about(axis: Array, angle: float) -> Array:
-    """The rotation by ``angle`` about the unit vector ``axis``."""
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
-
-
-def _turning(a: Array, b: Array) -> Array:
-    """The least rotation carrying the unit vector a onto b."""
-    axis = np.cross(a, b)
-    s = float(np.linalg.norm(axis))
-    if s < 1e-12:
-        if float(np.dot(a, b)) > 0:
-            return np.eye(3)
-        other = np.eye(3)[int(np.argmin(np.abs(a)))]
-        return _about(sphere.unit(np.cross(a, other)), np.pi)
-    return _about(axis / s, float(np.arctan2(s, np.dot(a, b))))
-
-
-def rotation_pose(R: Array) -> Array:
-    """(lon, sinlat, spin) of a rotation, as :func:`~linkwright.synthesis.path_families.
-    sphere_rotation` builds it from them."""
-    a0, t = R[:, 0], R[:, 1]
-    lon = float(np.arctan2(a0[1], a0[0]))
-    east = np.array([-np.sin(lon), np.cos(lon), 0.0])
-    north = np.cross(a0, east)
-    return np.array([lon, float(np.clip(a0[2], -1.0, 1.0)), float(np.arctan2(t @ north, t @ east))])
-
-
 def _triad_names(model: GenericModel) -> frozenset[str]:
     return frozenset(t.name for t in model.triads)
 
@@ -638,183 +552,6 @@ def _triad_names(model: GenericModel) -> frozenset[str]:
 def _rows(inputs: Array, start: int, count: int) -> Array:
     inputs = np.asarray(inputs)
     return inputs[start : start + count] if inputs.ndim == 2 else inputs
-
-
-# --------------------------------------------------------------------------------------------
-# Following a configuration with a triad
-# --------------------------------------------------------------------------------------------
-
-
-def follow(
-    mech: Mechanism,
-    start: Mapping[str, Array],
-    inputs: Array,
-    anchor: Array,
-    period: float = TWO_PI,
-    grid: int = FOLLOW_GRID,
-    around: bool = True,
-) -> Followed:
-    """One configuration of each linkage of a batch, followed by continuity.
-
-    ``start`` gives, per branching step (by step name), its branch value at the input
-    ``anchor`` (B,); the configuration is the branch of motion through it, continued from the
-    anchor up and down the input (not taken modulo a turn: a branch between two limit positions
-    may span more than one) to each of ``inputs`` (B, K), through a grid of ``grid`` samples a
-    ``period`` covering at least a period either side. An input the branch does not reach
-    directly (it turns back at a limit position first) is looked for a period further round,
-    the other way (unless ``around`` is False): a branch that rocks about the anchor is so
-    seen whole on any one turn of the input. Each step goes to the nearest configuration,
-    only while it is clearly nearest (:data:`CLEAR`); past that the configuration is not
-    valid.
-
-    Examples
-    --------
-    A Stephenson III driven at its output (bundled ``stephenson3-output``) has two circuits; the
-    one through pose 0 at the input 0 is followed for a whole turn, and closes:
-
-    >>> from linkwright.mechanisms import Stephenson3
-    >>> m = Stephenson3(A0=[0, 0], B0=[4, 0], D0=[0, 2.8], crank=1, coupler=4, rocker=3,
-    ...                 u1=2, v1=2, link1=0.7, link2=1, input="output")
-    >>> theta = np.linspace(0, 2 * np.pi, 9)[None]
-    >>> got = follow(m, {"A": np.array([0.0])}, theta, np.zeros(1))
-    >>> P = got.positions["P"][0]
-    >>> bool(got.valid.all()), bool(np.allclose(P[0], P[-1]))
-    (True, True)
-    """
-    inputs = np.asarray(inputs, dtype=float)
-    anchor = np.asarray(anchor, dtype=float)
-    rel = inputs - anchor[:, None]
-    got, alive = _follow_once(mech, start, rel, anchor, grid * 1.0 / period)
-    # Inputs the branch turns back from before reaching: a period round the other way (a
-    # second, smaller walk, for the linkages that need it).
-    need = np.flatnonzero(alive & ~got.valid.all(axis=1)) if around else np.zeros(0, int)
-    if need.size:
-        other = np.where(rel > 0, rel - period, rel + period)[need]
-        sub = mech[need] if mech.batch_shape else mech
-        part = {k: np.asarray(v)[need] if np.ndim(v) else v for k, v in start.items()}
-        more, _ = _follow_once(sub, part, other, anchor[need], grid * 1.0 / period)
-        take = ~got.valid[need] & more.valid
-        rows = need[:, None]
-
-        def merged(a: Array, b: Array) -> Array:
-            out = a.copy()
-            mask = take if b.ndim == 2 else take[..., None]
-            out[need] = np.where(mask, b, a[rows[:, 0]])
-            return out
-
-        got = Followed(
-            {n: merged(v, more.positions[n]) for n, v in got.positions.items()},
-            merged(got.valid, more.valid),
-            {n: merged(v, more.margins[n]) for n, v in got.margins.items()},
-            {n: merged(v, more.branches[n]) for n, v in got.branches.items()},
-        )
-    return got
-
-
-def _follow_once(
-    mech: Mechanism, start: Mapping[str, Array], rel: Array, anchor: Array, density: float
-) -> tuple[Followed, NDArray[np.bool_]]:
-    """:func:`follow` on the inputs ``anchor + rel`` directly (no second way round), with
-    ``density`` grid samples a radian; also whether the start exists at the anchor."""
-    b = rel.shape[0]
-    step = 1.0 / density
-    low = min(0.0, float(np.min(rel))) if rel.size else 0.0
-    high = max(0.0, float(np.max(rel))) if rel.size else 0.0
-    offsets = step * np.arange(math.floor(low / step), math.ceil(high / step) + 1)
-    n_grid = len(offsets)
-    # The grid first, so that the anchor (offset 0) sorts before any input equal to it.
-    theta = anchor[:, None] + np.concatenate([np.broadcast_to(offsets, (b, n_grid)), rel], axis=1)
-    order = np.argsort(theta, axis=1, kind="stable")
-    ordered = np.take_along_axis(theta, order, axis=1)
-    where = np.argsort(order, axis=1)  # each sample's place in the sorted sequence
-    home = where[:, int(np.flatnonzero(offsets == 0.0)[0])]
-    combos, motion = every_configuration(
-        mech.plan, mech.params(), ordered, points=mech.points, order=0
-    )
-    c = len(combos)
-    rows = np.arange(b)
-    names = list(motion.positions)
-    x = np.concatenate([motion.positions[n] for n in names], axis=-1)  # (C, B, S, D)
-    ok = motion.valid  # (C, B, S)
-    x = np.where(ok[..., None], x, np.nan)
-    match = np.ones((c, b), dtype=bool)
-    for name, values in start.items():
-        vals = np.array([combo[name] for combo in combos])
-        match &= vals[:, None] == np.broadcast_to(np.asarray(values, dtype=float), (b,))[None]
-    at_home = ok[:, rows, home]
-    first = np.argmax(match & at_home, axis=0)
-    alive0 = (match & at_home).any(axis=0)
-    count = theta.shape[1]
-    chosen = np.zeros((b, count), dtype=int)
-    good = np.zeros((b, count), dtype=bool)
-    chosen[rows, home], good[rows, home] = first, alive0
-    # Each configuration's labels (a dyad's sign, a triad's closure sign) stay put along a
-    # branch of motion and change only where it ends at a limit position.
-    labels = np.stack([np.broadcast_to(v, ok.shape) for v in motion.labels.values()], axis=-1)
-    size = float(np.nanmax(np.abs(x))) if np.isfinite(x).any() else 1.0
-
-    def walk(sequence: range, sense: int) -> None:
-        cur, alive = first.copy(), alive0.copy()
-        prev = x[cur, rows, home]
-        label = labels[cur, rows, home]
-        at = ordered[rows, home]
-        # The step before (its start and input span): the branch continues where a straight
-        # line through the last two samples points, to within a fraction of the step.
-        before = np.full_like(prev, np.nan)
-        width = np.full(b, np.nan)
-        for s in sequence:
-            moving = (s - home) * sense > 0  # rows already past their anchor this way
-            if not moving.any():
-                continue
-            d = np.sqrt(np.nansum((x[:, :, s] - prev[None]) ** 2, axis=-1))
-            same = np.all(labels[:, :, s] == label[None], axis=-1)
-            d = np.where(ok[:, :, s] & same, d, np.inf)
-            if c > 1:
-                part = np.partition(d, 1, axis=0)
-                near, second = part[0], part[1]
-            else:
-                near, second = d[0], np.full(b, np.inf)
-            nxt = np.argmin(d, axis=0)
-            # Clearly the nearest, and no jump: where the branch ends at a limit position between
-            # two samples, the nearest configuration left lies off the line it was running on.
-            span = np.abs(ordered[:, s] - at)
-            guess = prev + (prev - before) * (span / np.where(width > 0, width, np.nan))[:, None]
-            off = np.sqrt(np.nansum((x[nxt, rows, s] - guess) ** 2, axis=-1))
-            steady = ~np.isfinite(width) | (off <= JUMP * near) | (near <= 1e-9 * size)
-            keep = np.isfinite(near) & (near < CLEAR * second) & steady
-            alive = np.where(moving, alive & keep, alive)
-            cur = np.where(moving & alive, nxt, cur)
-            chosen[:, s] = np.where(moving, cur, chosen[:, s])
-            good[:, s] = np.where(moving, alive, good[:, s])
-            grows = moving & alive & (span > 1e-9)
-            before = np.where(grows[:, None], prev, before)
-            width = np.where(grows, span, width)
-            at = np.where(grows, ordered[:, s], at)
-            prev = np.where(grows[:, None], x[cur, rows, s], prev)
-
-    walk(range(count), 1)
-    walk(range(count - 1, -1, -1), -1)
-    place = where[:, n_grid:]
-    pick = np.take_along_axis(chosen, place, axis=1)
-    valid = np.take_along_axis(good, place, axis=1)
-    at = (pick, rows[:, None], place)
-
-    def gather(array: Array) -> Array:
-        out = array[at]
-        mask = valid if out.ndim == 2 else valid[..., None]
-        return np.where(mask, out, np.nan)
-
-    branches = {
-        step: np.where(valid, np.array([combo[step] for combo in combos])[pick], np.nan)
-        for step in combos[0]
-    }
-    followed = Followed(
-        {n: gather(motion.positions[n]) for n in names},
-        valid,
-        {n: gather(m) for n, m in motion.margins.items()},
-        branches,
-    )
-    return followed, alive0
 
 
 # --------------------------------------------------------------------------------------------

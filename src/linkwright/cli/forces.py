@@ -1,0 +1,233 @@
+"""``linkwright forces``: driving torque, joint reactions and shaking forces of a document."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Annotated, Any
+
+import numpy as np
+import typer
+
+from linkwright.cli.shared import (
+    CliError,
+    FileArg,
+    JsonOpt,
+    app,
+    document_heading,
+    dump_json,
+    fmt_number,
+    load_file,
+)
+
+if TYPE_CHECKING:
+    from linkwright.dynamics import Forces
+    from linkwright.io import Document
+
+DEFAULT_FORCE_INPUTS = [float(10 * k) for k in range(36)]
+
+
+@app.command()
+def forces(
+    file: FileArg,
+    speed: Annotated[
+        float | None,
+        typer.Option(
+            "--speed",
+            metavar="RPM",
+            help="Input speed in rpm (replaces the document's loads.speed).",
+            show_default=False,
+        ),
+    ] = None,
+    inputs: Annotated[
+        str | None,
+        typer.Option(
+            "--input",
+            "-i",
+            metavar="SPEC",
+            help="Input angles in degrees: START:STOP:STEP or a comma list. Default: 0 to 350 "
+            "every 10.",
+            show_default=False,
+        ),
+    ] = None,
+    all_: Annotated[
+        bool,
+        typer.Option("--all", help="Every real assembly configuration, not only the document's."),
+    ] = False,
+    as_json: JsonOpt = False,
+    as_csv: Annotated[bool, typer.Option("--csv", help="Print CSV.")] = False,
+) -> None:
+    """Driving torque, joint reactions, shaking force and moment, energies (planar linkages).
+
+    Masses come from the document's [mechanism.mass] table, loads and speed from [loads]
+    (docs/forces.md); units are the document's mass and length units and seconds (kg and m
+    give N, N·m and J).
+    """
+    from linkwright.cli.shared import parse_inputs
+    from linkwright.dynamics import (
+        ForcesInputError,
+        UnsupportedPlan,
+        forces_of,
+        loads_from,
+        masses_from,
+        structure,
+    )
+    from linkwright.dynamics.model import check_speed
+    from linkwright.engine import cost
+    from linkwright.mechanisms.base import configurations, solve
+
+    if as_csv and as_json:
+        raise CliError("--csv and --json cannot be used together")
+    if speed is not None and not (math.isfinite(speed) and abs(speed) <= 1e9):
+        raise CliError(f"--speed: must be a finite number of rpm up to 1e9 in size, got {speed}")
+    degrees = parse_inputs(inputs) if inputs is not None else list(DEFAULT_FORCE_INPUTS)
+    doc = load_file(file)
+    mech = doc.mechanism
+    try:
+        st = structure(mech.plan)
+    except UnsupportedPlan as exc:
+        raise CliError(f"forces: {exc}") from None
+    params = mech.params()
+    lengths = {b.name: float(np.max(params[b.name])) for b in st.bodies if b.name in params}
+    try:
+        masses = masses_from(doc.raw["mechanism"].get("mass", {}), st, lengths)
+        loads = loads_from(doc.raw.get("loads"), st, mech.plan.joints)
+        if speed is not None:
+            from dataclasses import replace
+
+            loads = replace(loads, speed_rpm=float(speed))
+        check_speed(masses, loads, "loads.speed (or --speed)")
+    except ForcesInputError as exc:
+        raise CliError(str(exc)) from None
+
+    # Bounded before the work: solving with derivatives, then one dense solve per sample.
+    unknowns = 3 * len(st.bodies)
+    shape = cost.Shape.of_mechanism(mech, periodic=False)
+    if all_:
+        cost.check_combinations(shape)
+    configs = shape.configurations if all_ else 1.0
+
+    def estimate(n: int) -> cost.Estimate:
+        found = cost.solve(shape, n, configurations=configs, order=2)
+        per = configs * n
+        extra = cost.Estimate(
+            per * (unknowns**3 / 3.0 + unknowns**2) / 50.0,
+            per * unknowns * (unknowns + 4) * 8 * 3,
+            f"solving Newton–Euler ({unknowns} unknowns) at {n:,} samples",
+        )
+        return found + extra
+
+    cost.with_knob(estimate, cost.CLI, len(degrees), 1, "the number of inputs (--input)").check(
+        cost.CLI
+    )
+    theta = np.radians(np.asarray(degrees, dtype=float))
+    found = configurations(mech, theta, order=2) if all_ else [(None, solve(mech, theta, order=2))]
+    results = [
+        (branches, forces_of(st, params, motion, masses, loads)) for branches, motion in found
+    ]
+    rows = [
+        _row(deg, branches, f, k)
+        for branches, f in results
+        for k, deg in enumerate(degrees)
+        if not all_ or bool(f.valid[k])
+    ]
+    meta = {
+        "units": _units(doc),
+        "speed_rpm": loads.speed_rpm,
+        "inertia": loads.inertia,
+        "links": list(st.names),
+    }
+    if as_json:
+        typer.echo(dump_json({**meta, "samples": rows}))
+    elif as_csv:
+        typer.echo(_csv(rows), nl=False)
+    else:
+        typer.echo(_text(doc, meta, rows), nl=False)
+
+
+def _units(doc: Document) -> dict[str, str]:
+    length = doc.units or "length unit"
+    return {
+        "length": length,
+        "mass": "the document's mass unit (kg)",
+        "force": f"mass unit·{length}/s² (N for kg and m)",
+        "torque": f"mass unit·{length}²/s² (N·m for kg and m)",
+        "energy": f"mass unit·{length}²/s² (J for kg and m)",
+    }
+
+
+def _num(x: Any) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _row(deg: float, branches: tuple[int, ...] | None, f: Forces, k: int) -> dict[str, Any]:
+    row: dict[str, Any] = {"input_deg": deg}
+    if branches is not None:
+        row["assembly"] = list(branches)
+    row["input_torque"] = _num(f.input_torque[k])
+    row["energy_torque"] = _num(f.energy_torque[k])
+    row["reactions"] = {n: [_num(v) for v in f.reactions[n][k]] for n in f.reactions}
+    if f.guides:
+        row["guides"] = {n: [_num(v) for v in f.guides[n][k]] for n in f.guides}
+    if f.gears:
+        row["gears"] = {n: _num(f.gears[n][k]) for n in f.gears}
+    row["shaking_force"] = [_num(v) for v in f.shaking_force[k]]
+    row["shaking_moment"] = _num(f.shaking_moment[k])
+    row["kinetic_energy"] = _num(f.kinetic[k])
+    row["potential_energy"] = _num(f.potential[k])
+    return row
+
+
+def _flat(row: Mapping[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {"input_deg": row["input_deg"]}
+    if "assembly" in row:
+        out["assembly"] = ",".join(f"{s:+d}" for s in row["assembly"])
+    out["input_torque"] = row["input_torque"]
+    for name, (x, y) in row["reactions"].items():
+        out[f"{name}.x"], out[f"{name}.y"] = x, y
+    for name, (n, m) in row.get("guides", {}).items():
+        out[f"{name}.normal"], out[f"{name}.moment"] = n, m
+    for name, t in row.get("gears", {}).items():
+        out[f"{name}.gear_torque"] = t
+    out["shaking.x"], out["shaking.y"] = row["shaking_force"]
+    out["shaking_moment"] = row["shaking_moment"]
+    out["kinetic_energy"] = row["kinetic_energy"]
+    out["potential_energy"] = row["potential_energy"]
+    return out
+
+
+def _csv(rows: list[dict[str, Any]]) -> str:
+    flat = [_flat(r) for r in rows]
+    if not flat:
+        return ""
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=list(flat[0]), lineterminator="\n")
+    writer.writeheader()
+    for r in flat:
+        writer.writerow({k: "" if v is None else v for k, v in r.items()})
+    return buf.getvalue()
+
+
+def _text(doc: Document, meta: Mapping[str, Any], rows: list[dict[str, Any]]) -> str:
+    units = meta["units"]
+    lines = [
+        document_heading(doc),
+        f"# input speed {meta['speed_rpm']:g} rpm"
+        + ("" if meta["inertia"] else " (static: no inertia forces)")
+        + f"; torque in {units['torque']}, forces in {units['force']}",
+    ]
+    flat = [_flat(r) for r in rows]
+    if not flat:
+        return "\n".join([*lines, "# no sample assembles"]) + "\n"
+    keys = list(flat[0])
+    lines.append(" ".join(f"{k:>14}" for k in keys))
+    for r in flat:
+        lines.append(
+            " ".join(
+                f"{r[k]:>14}" if isinstance(r[k], str) else fmt_number(r[k], 14, 6) for k in keys
+            )
+        )
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,439 @@
+"""The joint specs a composed :class:`~linkwright.mechanisms.linkage.Linkage` is written with.
+
+Each spec places one joint from joints listed before it, exactly as the engine's construction
+plans do (see DESIGN.md). In the plane (``space = "plane"``, the default):
+
+==============  ============  ====================================================================
+spec            ``type``      places
+==============  ============  ====================================================================
+FixedJoint      ``fixed``     a ground pivot at ``at`` = [x, y]
+CrankJoint      ``crank``     a joint at ``length`` from ``pivot``, at the absolute angle
+                              ``phase + ratio·θ`` (θ the input; every crank is driven by it)
+DyadJoint       ``rrr``       the pin of two binary links: circle(p1, r1) ∩ circle(p2, r2)
+SliderJoint     ``rrp``       a slider pin: circle(p1, r) ∩ the line through joint
+                              ``line_point`` at ``line_angle`` (a guide of fixed direction)
+RigidJoint      ``rigid``     a point fixed on the link ``origin``→``toward`` at local (u, v)
+==============  ============  ====================================================================
+
+On the sphere (``space = "sphere"``) every joint is a revolute whose axis passes through the
+centre O of the unit sphere; a joint is the unit vector along its axis and a link's length is
+the arc (central angle, radians) between its joints' axes:
+
+================  ==========  ==================================================================
+spec              ``type``    places
+================  ==========  ==================================================================
+FixedJoint        ``fixed``   a ground pivot on the axis ``at`` = [x, y, z] (any non-zero vector:
+                              the joint is its direction, the unit vector ``at / |at|``)
+SphereCrankJoint  ``crank``   a joint at arc ``arc`` from the fixed joint ``pivot``, at angle
+                              ``phase + ratio·θ`` about +O·pivot from the great circle that
+                              runs from the pivot towards the fixed joint ``toward``
+DyadJoint         ``rrr``     the pin of two binary links: the small circles of arcs r1 about
+                              p1 and r2 about p2 meet
+SphereRigidJoint  ``rigid``   a point at arc ``arc`` from ``origin``, at ``angle`` from the
+                              great circle origin→toward (right-handed about +O·origin)
+================  ==========  ==================================================================
+
+A slider has no spherical counterpart of its own: a pin whose guide is a great circle is an
+``rrr`` dyad whose second link, 90° long, turns about the guide's pole, and is written so.
+
+Angles are radians here (documents speak degrees). Assembly signs are the engine's: a dyad
+joint J placed from P1 then P2 has ``assembly = sign((P2 − P1) × (J − P1))`` in the plane
+(+1: J to the left of P1→P2) and ``sign((P1 × P2)·J)`` on the sphere (the same side, seen from
+outside the sphere); a slider pin B has ``assembly = sign((B − H)·d)``, H the foot of P1 on the
+guide and d = (cos line_angle, sin line_angle). Planar rigid points sit at (u, v) in the frame
+with origin ``origin`` and x axis towards ``toward`` (v to the left).
+
+This module holds the specs, the tables that map a document's ``type`` to them, what kind of
+number each field must be (:func:`numeric_kinds`) and the linkage's error
+(:class:`InvalidLinkage`); :mod:`.linkage_checks` checks them and :mod:`.linkage` composes them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from linkwright.geometry import sphere
+from linkwright.mechanisms.base import InvalidMechanism
+
+__all__ = [
+    "ALL_SPECS",
+    "JOINT_TYPES",
+    "REFERENCES",
+    "SPACES",
+    "SPHERE_JOINT_TYPES",
+    "CrankJoint",
+    "DyadJoint",
+    "FixedJoint",
+    "InvalidLinkage",
+    "Joint",
+    "RigidJoint",
+    "SliderJoint",
+    "SphereCrankJoint",
+    "SphereRigidJoint",
+    "numeric_kinds",
+    "unit_axis",
+]
+
+Array = NDArray[np.float64]
+
+
+class InvalidLinkage(InvalidMechanism):
+    """A composed linkage is ill-formed; says which joint (or ``traced``) and what is wrong.
+
+    Attributes
+    ----------
+    index : int or None
+        Position of the offending joint in ``joints`` (None for problems of the whole linkage).
+    joint : str or None
+        Its name, when it has a usable one.
+    field : str or None
+        The joint's field at fault (``"r1"``), or ``"traced"``, or None for structural problems.
+    problem : str
+        The message (it names the joint itself, so it reads alone).
+    """
+
+    # Its public home stays the family's module: tracebacks and pickles name it from there.
+    __module__ = "linkwright.mechanisms.linkage"
+
+    def __init__(
+        self,
+        problem: str,
+        *,
+        index: int | None = None,
+        joint: str | None = None,
+        field: str | None = None,
+    ) -> None:
+        self.index = index
+        self.joint = joint
+        self.field = field
+        self.problem = problem
+        super().__init__(problem)
+
+
+# --------------------------------------------------------------------------------------------
+# Joint specs
+# --------------------------------------------------------------------------------------------
+
+
+class _Spec:
+    """Equality by value, arrays included: two specs are equal when every field is.
+
+    The dataclass default compares field tuples with ``==``, which for a point (an array of
+    two) has no single truth value; comparing the arrays whole makes linkages comparable.
+    """
+
+    # Every spec is a dataclass: this tells the type checker so (dataclasses sets it).
+    __dataclass_fields__: ClassVar[dict[str, Any]]
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return all(_same_value(getattr(self, f.name), getattr(other, f.name)) for f in fields(self))
+
+    __hash__ = None  # type: ignore[assignment]  # specs may hold arrays
+
+
+def _same_value(a: Any, b: Any) -> bool:
+    if isinstance(a, str) or isinstance(b, str):
+        return bool(a == b)
+    try:
+        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
+    except (TypeError, ValueError):
+        return bool(a == b)
+
+
+@dataclass(frozen=True, eq=False)
+class FixedJoint(_Spec):
+    """A ground pivot.
+
+    Parameters
+    ----------
+    name : the joint's name.
+    at : in the plane its place [x, y] (or a batch of places, shape ``batch + (2,)``); on the
+        sphere its axis [x, y, z], any non-zero vector along it (shape ``batch + (3,)``): the
+        joint is the unit vector ``at / |at|``, so ``[0, 0, 1]`` and ``[1, 1, 0]`` can be
+        written as such. The spec keeps the vector as given.
+
+    Examples
+    --------
+    >>> from linkwright import Linkage, solve
+    >>> ground = [FixedJoint("O", [0, 0]), FixedJoint("B0", [3, 0])]
+    >>> arm = [CrankJoint("A", "O", 1.0), DyadJoint("B", "A", 3.0, "B0", 2.0)]
+    >>> solve(Linkage(joints=ground + arm), [0.0]).positions["O"].tolist()
+    [[0.0, 0.0]]
+    """
+
+    name: str
+    at: ArrayLike
+
+    type: ClassVar[str] = "fixed"
+    parents: ClassVar[tuple[str, ...]] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class CrankJoint(_Spec):
+    """A joint driven by the input: at ``length`` from ``pivot``, at angle ``phase + ratio·θ``.
+
+    The angle is absolute (from +x, counter-clockwise, radians). ``pivot`` is usually a fixed
+    joint; a placed moving joint is allowed too (a gear carried by a link: its arm still turns
+    with the input against the ground). ``ratio`` must be nonzero (a crank that does not turn
+    drives nothing).
+
+    Examples
+    --------
+    >>> from linkwright import Linkage, solve
+    >>> joints = [FixedJoint("O", [0, 0]), CrankJoint("A", "O", 2.0, phase=0.5)]
+    >>> solve(Linkage(joints=joints), [0.0]).positions["A"].round(6).tolist()
+    [[1.755165, 0.958851]]
+    """
+
+    name: str
+    pivot: str
+    length: ArrayLike
+    ratio: ArrayLike = 1.0
+    phase: ArrayLike = 0.0
+
+    type: ClassVar[str] = "crank"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.pivot,)
+
+
+@dataclass(frozen=True, eq=False)
+class DyadJoint(_Spec):
+    """The pin of two binary links (an RRR dyad): at ``r1`` from ``p1`` and ``r2`` from ``p2``.
+
+    In the plane ``assembly`` is ``sign((p2 − p1) × (J − p1))``: +1 when the joint lies to the
+    left of the line from p1 to p2. On the sphere ``r1`` and ``r2`` are arcs (radians, strictly
+    between 0 and π) and ``assembly`` is ``sign((p1 × p2)·J)``: +1 when J lies to the left of
+    the great circle p1→p2 seen from outside the sphere.
+
+    Examples
+    --------
+    B lies at 3 from A and 2 from B0; with links too short it does not assemble:
+
+    >>> import numpy as np
+    >>> from linkwright import Linkage, solve
+    >>> ground = [FixedJoint("O", [0, 0]), FixedJoint("B0", [3, 0]), CrankJoint("A", "O", 1.0)]
+    >>> B = solve(Linkage(joints=ground + [DyadJoint("B", "A", 3.0, "B0", 2.0)]), [0.0])
+    >>> B.positions["B"].round(6).tolist()
+    [[3.25, 1.984313]]
+    >>> short = Linkage(joints=ground + [DyadJoint("B", "A", 0.5, "B0", 0.5)])
+    >>> bool(solve(short, [0.0]).valid.any())
+    False
+    """
+
+    name: str
+    p1: str
+    r1: ArrayLike
+    p2: str
+    r2: ArrayLike
+    assembly: ArrayLike = 1.0
+
+    type: ClassVar[str] = "rrr"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.p1, self.p2)
+
+
+@dataclass(frozen=True, eq=False)
+class SliderJoint(_Spec):
+    """A slider pin (an RRP dyad): at ``r`` from ``p1``, on the guide line through the joint
+    ``line_point`` at the fixed absolute angle ``line_angle`` (radians).
+
+    ``assembly`` is ``sign((B − H)·d)``, H the foot of p1 on the guide, d its direction.
+
+    Examples
+    --------
+    >>> from linkwright import Linkage, solve
+    >>> joints = [FixedJoint("O", [0, 0]), FixedJoint("G", [0, -0.5]),
+    ...           CrankJoint("A", "O", 1.0), SliderJoint("B", "A", 2.5, "G", 0.0)]
+    >>> solve(Linkage(joints=joints), [0.0]).positions["B"].round(6).tolist()
+    [[3.44949, -0.5]]
+    """
+
+    name: str
+    p1: str
+    r: ArrayLike
+    line_point: str
+    line_angle: ArrayLike
+    assembly: ArrayLike = 1.0
+
+    type: ClassVar[str] = "rrp"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.p1, self.line_point)
+
+
+@dataclass(frozen=True, eq=False)
+class RigidJoint(_Spec):
+    """A point fixed on the link ``origin``→``toward``: local (u, v), x along the link, v left.
+
+    ``origin`` and ``toward`` must be two joints of one rigid link (their distance constant).
+
+    Examples
+    --------
+    >>> from linkwright import Linkage, solve
+    >>> joints = [FixedJoint("O", [0, 0]), CrankJoint("A", "O", 1.0),
+    ...           RigidJoint("P", "O", "A", u=2.0, v=0.0)]
+    >>> solve(Linkage(joints=joints), [0.0]).positions["P"].tolist()
+    [[2.0, 0.0]]
+    """
+
+    name: str
+    origin: str
+    toward: str
+    u: ArrayLike = 0.0
+    v: ArrayLike = 0.0
+
+    type: ClassVar[str] = "rigid"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.origin, self.toward)
+
+
+@dataclass(frozen=True, eq=False)
+class SphereCrankJoint(_Spec):
+    """A spherical crank: at arc ``arc`` from the fixed joint ``pivot``, turned by the input.
+
+    Its angle ``phase + ratio·θ`` is measured right-handed about +O·pivot from the great circle
+    that runs from the pivot towards the fixed joint ``toward``. ``toward`` defaults to the first
+    fixed joint listed before the crank other than its pivot; the linkage stores the name it
+    resolved to. Paper 000's crank (A0 = (1, 0, 0), A = (cos a2, sin a2 cos θ, sin a2 sin θ)) is
+    ``SphereCrankJoint("A", "A0", a2, toward="B0")`` with B0 on the frame circle at a1 > 0.
+    ``arc`` lies strictly between 0 and π; ``ratio`` must be nonzero.
+
+    Examples
+    --------
+    Paper 000's crank: A = (cos a2, sin a2 cos θ, sin a2 sin θ) about A0 = (1, 0, 0).
+
+    >>> import numpy as np
+    >>> from linkwright import Linkage, solve
+    >>> joints = [FixedJoint("A0", [1, 0, 0]), FixedJoint("B0", [0, 1, 0]),
+    ...           SphereCrankJoint("A", "A0", 0.4, toward="B0")]
+    >>> A = solve(Linkage(joints=joints, space="sphere"), [0.3]).positions["A"][0]
+    >>> bool(np.allclose(A, [np.cos(0.4), np.sin(0.4) * np.cos(0.3), np.sin(0.4) * np.sin(0.3)]))
+    True
+    """
+
+    name: str
+    pivot: str
+    arc: ArrayLike
+    ratio: ArrayLike = 1.0
+    phase: ArrayLike = 0.0
+    toward: str | None = None
+
+    type: ClassVar[str] = "crank"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.pivot,)
+
+
+@dataclass(frozen=True, eq=False)
+class SphereRigidJoint(_Spec):
+    """A point fixed on the spherical link ``origin``→``toward``: at arc ``arc`` from the
+    origin (0 to π), at ``angle`` from the great circle origin→toward, right-handed about
+    +O·origin (paper 000's coupler point C, with arc AC and angle μ = BAC).
+
+    ``origin`` and ``toward`` must be two joints of one rigid link.
+
+    Examples
+    --------
+    A point at arc 0.5 from A on its link stays at that arc from A:
+
+    >>> import numpy as np
+    >>> from linkwright import Linkage, solve
+    >>> joints = [FixedJoint("A0", [1, 0, 0]), FixedJoint("B0", [np.cos(1.2), np.sin(1.2), 0]),
+    ...           SphereCrankJoint("A", "A0", 0.4), DyadJoint("B", "A", 1.0, "B0", 0.9),
+    ...           SphereRigidJoint("C", "A", "B", arc=0.5, angle=0.3)]
+    >>> p = solve(Linkage(joints=joints, space="sphere"), [0.3]).positions
+    >>> round(float(np.arccos(p["A"][0] @ p["C"][0])), 12)
+    0.5
+    """
+
+    name: str
+    origin: str
+    toward: str
+    arc: ArrayLike = 0.0
+    angle: ArrayLike = 0.0
+
+    type: ClassVar[str] = "rigid"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.origin, self.toward)
+
+
+Joint = (
+    FixedJoint
+    | CrankJoint
+    | DyadJoint
+    | SliderJoint
+    | RigidJoint
+    | SphereCrankJoint
+    | SphereRigidJoint
+)
+"""Any joint spec."""
+
+JOINT_TYPES: dict[str, type[Joint]] = {
+    cls.type: cls for cls in (FixedJoint, CrankJoint, DyadJoint, SliderJoint, RigidJoint)
+}
+"""Document ``type`` → joint spec class, in the plane."""
+
+SPHERE_JOINT_TYPES: dict[str, type[Joint]] = {
+    cls.type: cls for cls in (FixedJoint, SphereCrankJoint, DyadJoint, SphereRigidJoint)
+}
+"""Document ``type`` → joint spec class, on the sphere (no ``rrp``: see the module notes)."""
+
+SPACES: dict[str, dict[str, type[Joint]]] = {"plane": JOINT_TYPES, "sphere": SPHERE_JOINT_TYPES}
+"""A linkage's ``space`` → the joint spec classes it is built from."""
+
+ALL_SPECS = (*JOINT_TYPES.values(), SphereCrankJoint, SphereRigidJoint)
+
+# What each numeric field must be; names are the dataclass fields. A DyadJoint's lengths are
+# arcs on the sphere, and a FixedJoint's place an axis: see numeric_kinds.
+_NUMERIC: dict[type, dict[str, str]] = {
+    FixedJoint: {"at": "point"},
+    CrankJoint: {"length": "length", "ratio": "ratio", "phase": "number"},
+    DyadJoint: {"r1": "length", "r2": "length", "assembly": "sign"},
+    SliderJoint: {"r": "length", "line_angle": "number", "assembly": "sign"},
+    RigidJoint: {"u": "number", "v": "number"},
+    SphereCrankJoint: {"arc": "arc", "ratio": "ratio", "phase": "number"},
+    SphereRigidJoint: {"arc": "offset", "angle": "number"},
+}
+_ON_SPHERE: dict[str, str] = {"point": "axis", "length": "arc"}
+# The fields of each spec that name a parent joint (validation checks each is placed before).
+REFERENCES: dict[type, tuple[str, ...]] = {
+    FixedJoint: (),
+    CrankJoint: ("pivot",),
+    DyadJoint: ("p1", "p2"),
+    SliderJoint: ("p1", "line_point"),
+    RigidJoint: ("origin", "toward"),
+    SphereCrankJoint: ("pivot", "toward"),
+    SphereRigidJoint: ("origin", "toward"),
+}
+
+
+def numeric_kinds(joint: Joint, space: str) -> dict[str, str]:
+    kinds = _NUMERIC[type(joint)]
+    if space == "sphere":
+        return {attr: _ON_SPHERE.get(what, what) for attr, what in kinds.items()}
+    return kinds
+
+
+def unit_axis(axis: ArrayLike) -> Array:
+    """The unit vector along ``axis``; scaled by its largest component first, so that neither a
+    tiny nor a huge vector under- or overflows on the way."""
+    at = np.asarray(axis, dtype=float)
+    big = np.max(np.abs(at), axis=-1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return sphere.unit(at / big)
