@@ -19,7 +19,7 @@ from linkwright.cli.shared import (
     app,
     documents_json,
     dump_json,
-    load_file,
+    family_and_template,
     mechanism_toml,
     read_points,
 )
@@ -85,15 +85,7 @@ def atlas_build(
     curves in shards (Dask tasks) and index them. A killed build resumes where it stopped."""
     from linkwright.atlas import AtlasBuildError, build
 
-    like = load_file(template).mechanism if template is not None else None
-    if family is None and like is None:
-        raise CliError("--family: give a family, or a --template document to take it from")
-    family = family if family is not None else like.family  # type: ignore[union-attr]
-    if family == "linkage" and like is None:
-        raise CliError(
-            "--family linkage: a composed linkage's joints come from a document: give "
-            "--template FILE (its structure is kept, its numbers are drawn about its own)"
-        )
+    family, like = family_and_template(family, template, "its numbers are drawn about its own")
     try:
         with Progress("building", quiet) as progress:
             manifest = build(

@@ -314,3 +314,21 @@ def mechanism_toml(document: Mapping[str, Any]) -> str:
     from linkwright.io.documents import dumps_toml
 
     return dumps_toml(document).rstrip()
+
+
+def family_and_template(
+    family: str | None, template: str | None, numbers: str
+) -> tuple[str, Mechanism | None]:
+    """The family a search or an atlas is of, and its template mechanism (``--template``):
+    the family defaults to the template's, and a composed linkage needs one (``numbers`` says
+    what becomes of the template's numbers)."""
+    like = load_file(template).mechanism if template is not None else None
+    if family is None and like is None:
+        raise CliError("--family: give a family, or a --template document to take it from")
+    name = family if family is not None else like.family  # type: ignore[union-attr]
+    if name == "linkage" and like is None:
+        raise CliError(
+            "--family linkage: a composed linkage's joints come from a document: give "
+            f"--template FILE (its structure is kept, {numbers})"
+        )
+    return name, like

@@ -21,6 +21,7 @@ from linkwright.cli.shared import (
     decimal_text,
     documents_json,
     dump_json,
+    family_and_template,
     fmt_number,
     load_file,
     mechanism_toml,
@@ -602,15 +603,7 @@ def synth_path(
 
     if sum((angles is not None, free_timing, no_timing)) > 1:
         raise CliError("give at most one of --angles, --free-timing and --no-timing")
-    like = load_file(template).mechanism if template is not None else None
-    if family is None and like is None:
-        raise CliError("--family: give a family, or a --template document to take it from")
-    family = family if family is not None else like.family  # type: ignore[union-attr]
-    if family == "linkage" and like is None:
-        raise CliError(
-            "--family linkage: a composed linkage's joints come from a document: give "
-            "--template FILE (its structure is kept, its numbers are free)"
-        )
+    family, like = family_and_template(family, template, "its numbers are free")
     try:
         model = model_for(family, like)
     except ModelError as exc:

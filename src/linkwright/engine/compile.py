@@ -46,7 +46,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine.compile_steps import HOIST, fragment
-from linkwright.engine.evaluate import Motion, batch_shape, evaluate, place_all
+from linkwright.engine.evaluate import (
+    Motion,
+    batch_shape,
+    evaluate,
+    motion_of_states,
+    place_all,
+)
 from linkwright.engine.plan import Plan, placed_joints
 from linkwright.engine.plane_steps import Crank, Fixed, Trammel
 from linkwright.engine.sphere_steps import SphereCrank
@@ -777,30 +783,8 @@ def _expand(value: Array, lead: tuple[int, ...]) -> Array:
 
 
 def _motion(theta: Array, states: dict[str, JointState], order: int) -> Motion:
-    """The masked Motion of raw states, by evaluate()'s rules."""
-    valid = np.ones(theta.shape, dtype=bool)
-    regular = np.ones(theta.shape, dtype=bool)
-    for state in states.values():
-        valid = valid & state.valid
-        regular = regular & state.regular
-    keep_pos, keep_der = valid[..., None], regular[..., None]
-
-    def masked(arrays: dict[str, Array | None], keep: NDArray[np.bool_]) -> dict[str, Array]:
-        return {k: np.where(keep, a, np.nan) for k, a in arrays.items() if a is not None}
-
-    return Motion(
-        input=theta,
-        positions=masked({k: s.pos for k, s in states.items()}, keep_pos),
-        velocities=masked({k: s.vel for k, s in states.items()}, keep_der) if order >= 1 else None,
-        accelerations=(
-            masked({k: s.acc for k, s in states.items()}, keep_der) if order >= 2 else None
-        ),
-        valid=valid,
-        regular=regular,
-        branches={k: s.branch for k, s in states.items() if s.branch is not None},
-        margins={k: s.margin for k, s in states.items() if s.margin is not None},
-        labels={k: s.branch for k, s in states.items() if s.branch is not None},
-    )
+    """The masked Motion of raw states, by evaluate()'s rules (its own function)."""
+    return motion_of_states(theta, states, order)
 
 
 def _stack_motions(motions: list[Motion]) -> Motion:

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine.plan import JointState, Param, Plan
 
-__all__ = ["Motion", "evaluate", "place_all", "take"]
+__all__ = ["Motion", "evaluate", "motion_of_states", "place_all", "take"]
 
 Array = NDArray[np.float64]
 Index = int | slice | NDArray[np.integer[Any]] | NDArray[np.bool_]
@@ -219,6 +219,13 @@ def evaluate(
     theta, states = place_all(
         plan, params, theta, points=points, branches=branches, order=order, crossings=crossings
     )
+    return motion_of_states(theta, states, order)
+
+
+def motion_of_states(theta: Array, states: Mapping[str, JointState], order: int) -> Motion:
+    """The masked :class:`Motion` of placed joint states (what :func:`place_all` returns, or a
+    compiled plan's equivalent): positions NaN exactly where the linkage is not assembled,
+    derivatives exactly where it is not regular."""
     valid = np.ones(theta.shape, dtype=bool)
     regular = np.ones(theta.shape, dtype=bool)
     for state in states.values():
