@@ -603,7 +603,7 @@ def trace(
         samples lie at most M/(n − S) of measure apart, and the grid they are interpolated on
         has cells of at most M/(4n), so c ≤ n/(n − S) + 2/4 ≤ 1.65 < 2. Measured on 12,000
         circuits of random near-singular four-bars, slider-cranks and spherical four-bars (the
-        recipes of tests/test_singular.py, n = 60 and 360): c ≤ 1.19, median 1.00, wherever
+        recipes of tests/singular_helpers.py, n = 60 and 360): c ≤ 1.19, median 1.00, wherever
         the positions' rounding is below 1e-6 of the curve. Against the curve's size D_j: a
         path that any line meets at most k times is at most (k/2)·π·D_j long (Cauchy–Crofton),
         so a four-bar's coupler point (its curve has degree 6, k = 6) steps at most

@@ -72,8 +72,8 @@ TWO_PI = 2.0 * np.pi
 
 # The gap at a crossing, in units of ε·(|P1| + |P2|), the rounding of the parents' positions. A
 # gap this small cannot be told from zero. Four-bars kept 1e-12 of their size from a deltoid
-# (tests/test_singular.py's recipes) miss by 15 and more of these units (the least of 200,000
-# drawn), and swing through half a turn there instead of crossing.
+# (the recipes of tests/singular_helpers.py) miss by 15 and more of these units (the least of
+# 200,000 drawn), and swing through half a turn there instead of crossing.
 CROSSING_ULPS = 4.0
 # How nearly the links must allow the meeting (r1 = r2, or r1 + r2 = π on the sphere), relative
 # to r1 + r2 in the plane and in radians on the sphere: a document's equal lengths (or arcs in

@@ -408,8 +408,9 @@ def study(body: StudyRequest) -> dict[str, Any]:
     Traceback (most recent call last):
     ...
     linkwright.server.budget.TooCostly: too costly: tracing 51 steps × 42 circuits of 4,096 \
-samples (6 joints) needs about 5.1e+08 units of work (at most 5e+07 per request) and 3.1 GB of \
-memory (at most 268 MB per request); lower count to 3 or fewer, or the gear ratio
+samples (6 joints) needs about 7.8e+07 units of work (at most 5e+07 per request) and 3.1 GB of \
+memory (at most 268 MB per request); lower count to 3 or fewer, or samples to 352 or fewer, or \
+the gear ratio
     """
     with budget.request("count or samples"):
         return _study(body)
