@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, example, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 from linkwright.analysis import (
@@ -218,7 +218,9 @@ def test_output_limits_by_the_law_of_cosines():
 # --- derivatives, transmission angle ----------------------------------------------------------
 
 
-@settings(max_examples=40, deadline=None)
+# Most random arcs put a limit or a change point near the sampled input, so many draws are
+# rejected by design.
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
 @given(arc_deg, arc_deg, arc_deg, arc_deg, assembly, st.floats(-np.pi, np.pi))
 def test_output_rates_match_central_differences(a1, a2, a3, a4, asm, theta):
     fb = sph(a1, a2, a3, a4, asm)
