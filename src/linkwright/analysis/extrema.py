@@ -99,26 +99,24 @@ def circuit_extremum(
     t_mid, b_mid = at(i)
     best_x, best_v, best_b = t_mid, np.take_along_axis(values, i, -1)[..., 0], b_mid
     # The maximum lies between the neighbouring samples; each half-bracket lies on one branch
-    # (a branch change happens only at a limit, which is itself a sample), so refine both halves.
-    for step in (-1, 1):
-        t_nb, b_nb = at(i + step)
-        # Across the seam of a full turn (last sample → sample 0) the neighbour is 2π away in
-        # value but one step away in motion: take it continuously.
-        t_nb = t_mid + np.remainder(t_nb - t_mid + np.pi, 2 * np.pi) - np.pi
-        same_leg = b_nb == b_mid
-        b_use = np.where(same_leg, b_mid, b_nb)
+    # (a branch change happens only at a limit, which is itself a sample), so refine both
+    # halves, together: a leading axis of two, one evaluation per golden step for both.
+    t_nb, b_nb = (np.stack(pair) for pair in zip(at(i - 1), at(i + 1), strict=True))
+    # Across the seam of a full turn (last sample → sample 0) the neighbour is 2π away in
+    # value but one step away in motion: take it continuously.
+    t_nb = t_mid + np.remainder(t_nb - t_mid + np.pi, 2 * np.pi) - np.pi
+    b_use = np.where(b_nb == b_mid, b_mid, b_nb)
 
-        def f(x: Array, b_use: Array = b_use) -> Array:
-            m = evaluate(
-                plan, params, x[..., None], points=points, branches={dyad: b_use[..., None]}
-            )
-            return (sign * quantity(m))[..., 0]
+    def f(x: Array) -> Array:
+        m = evaluate(plan, params, x[..., None], points=points, branches={dyad: b_use[..., None]})
+        return (sign * quantity(m))[..., 0]
 
-        x, v = golden_max(f, np.minimum(t_mid, t_nb), np.maximum(t_mid, t_nb))
-        better = v > best_v
-        best_x = np.where(better, x, best_x)
-        best_v = np.where(better, v, best_v)
-        best_b = np.where(better, b_use, best_b)
+    x, v = golden_max(f, np.minimum(t_mid, t_nb), np.maximum(t_mid, t_nb))
+    for side in range(2):
+        better = v[side] > best_v
+        best_x = np.where(better, x[side], best_x)
+        best_v = np.where(better, v[side], best_v)
+        best_b = np.where(better, b_use[side], best_b)
     nothing = ~np.isfinite(best_v)
     return (
         np.where(nothing, np.nan, sign * best_v),

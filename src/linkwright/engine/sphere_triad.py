@@ -351,19 +351,22 @@ def _solve_chunk(p: dict[str, Array]) -> tuple[Array, Array]:
     mid = np.arctan2(row[..., 2], row[..., 1])
     phi = np.concatenate((phi, phi), axis=-1)
     psi = np.concatenate((mid + half, mid - half), axis=-1)
-    mm = np.stack((m1, m2), axis=1)  # (N, 2, 3, 3)
     for _ in range(NEWTON_STEPS):
-        m, dm = _trig(phi)
-        n, dn = _trig(psi)
-        mn = np.einsum("nki,neij->nkej", m, mm)  # (N, 16, 2, 3): mᵀ M_e
-        dmn = np.einsum("nki,neij->nkej", dm, mm)
-        g = np.einsum("nkej,nkj->nke", mn, n)
-        j_phi = np.einsum("nkej,nkj->nke", dmn, n)
-        j_psi = np.einsum("nkej,nkj->nke", mn, dn)
-        det = j_phi[..., 0] * j_psi[..., 1] - j_phi[..., 1] * j_psi[..., 0]
+        # Both equations mᵀ M_e n = 0 with m = (1, cos φ, sin φ), n = (1, cos ψ, sin ψ), written
+        # out term by term: an einsum over these 3 × 3 forms costs several times more.
+        cp, sp, cq, sq = np.cos(phi), np.sin(phi), np.cos(psi), np.sin(psi)
+        g, j_phi, j_psi = [], [], []
+        for form in (m1, m2):
+            k = form[:, None, :, :]  # (N, 1, 3, 3) against (N, 16)
+            mn = [k[..., i, 0] + k[..., i, 1] * cq + k[..., i, 2] * sq for i in range(3)]
+            dmn = [k[..., i, 2] * cq - k[..., i, 1] * sq for i in range(3)]
+            g.append(mn[0] + cp * mn[1] + sp * mn[2])
+            j_phi.append(cp * mn[2] - sp * mn[1])
+            j_psi.append(dmn[0] + cp * dmn[1] + sp * dmn[2])
+        det = j_phi[0] * j_psi[1] - j_phi[1] * j_psi[0]
         with np.errstate(divide="ignore", invalid="ignore"):
-            d_phi = (g[..., 0] * j_psi[..., 1] - g[..., 1] * j_psi[..., 0]) / det
-            d_psi = (j_phi[..., 0] * g[..., 1] - j_phi[..., 1] * g[..., 0]) / det
+            d_phi = (g[0] * j_psi[1] - g[1] * j_psi[0]) / det
+            d_psi = (j_phi[0] * g[1] - j_phi[1] * g[0]) / det
         # A singular Jacobian (exactly at a double root) stops that candidate where it is.
         step_ok = np.isfinite(d_phi) & np.isfinite(d_psi)
         phi = np.where(step_ok, phi - d_phi, phi)
@@ -398,8 +401,13 @@ def _select(
         return np.take_along_axis(a, order[..., None], axis=-2)
 
     b, c, e, theta_b, theta_c, resid, ok = map(take, (b, c, e, theta_b, theta_c, resid, ok))
-    joints = np.concatenate((b, c), axis=-1)
-    gap = np.abs(joints[..., :, None, :] - joints[..., None, :, :]).max(axis=-1)
+    # The largest coordinate difference of (B, C) between every two candidates, one
+    # coordinate at a time: the (…, k, k, 6) array at once is the bulk of a batch's memory.
+    gap = np.zeros(b.shape[:-1] + b.shape[-2:-1])
+    for joint in (b, c):
+        for axis in range(3):
+            x = joint[..., axis]
+            np.maximum(gap, np.abs(x[..., :, None] - x[..., None, :]), out=gap)
     k = ok.shape[-1]
     earlier = np.tril(np.ones((k, k), dtype=bool), k=-1)  # [j, i]: i < j
     with np.errstate(invalid="ignore"):

@@ -93,9 +93,11 @@ def _solve_distinct(
     """
     n = int(np.prod(batch, dtype=int))
     flat = [np.broadcast_to(a, batch + a.shape[len(batch) :]).reshape((n, -1)) for a in args]
-    _, first, inverse = np.unique(
-        np.concatenate(flat, axis=1), axis=0, return_index=True, return_inverse=True
-    )
+    # Rows compared as raw bytes (a 1-D unique, several times faster than ``axis=0``): a
+    # signed zero or a NaN payload may then count as distinct, which only costs a solve.
+    rows = np.ascontiguousarray(np.concatenate(flat, axis=1))
+    keys = rows.view(np.dtype((np.void, rows.dtype.itemsize * rows.shape[1]))).ravel()
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     picked = (
         np.broadcast_to(a, batch + a.shape[len(batch) :]).reshape((n,) + a.shape[len(batch) :])[
             first

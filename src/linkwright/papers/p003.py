@@ -91,12 +91,29 @@ __all__ = [
 ]
 
 
-def _fourbar_values(L1: float, L2: float, L3s: list[float], L4: float) -> dict[str, np.ndarray]:
-    """Coefficients and pressure-angle extremes for several rocker lengths at once (a batch)."""
-    fb = FourBar(A0=[0.0, 0.0], B0=[L4, 0.0], crank=L1, coupler=L2, rocker=np.array(L3s))
+def _fourbar_values(rows: list[tuple[float, float, list[float], float]]) -> list[dict[str, Any]]:
+    """Coefficients and pressure-angle extremes of every (L1, L2, rocker lengths, L4) row.
+
+    All rows are one batch (each row's rocker lengths padded with its last): the exact extrema
+    refine every mechanism together, so one batch costs about what one row did.
+    """
+    width = max(len(r[2]) for r in rows)
+    padded = [r[2] + [r[2][-1]] * (width - len(r[2])) for r in rows]
+
+    def column(i: int) -> np.ndarray:
+        return np.array([[r[i]] * width for r in rows], dtype=float)
+
+    l4 = column(3)
+    fb = FourBar(
+        A0=np.zeros(l4.shape + (2,)),
+        B0=np.stack((l4, np.zeros_like(l4)), axis=-1),
+        crank=column(0),
+        coupler=column(1),
+        rocker=np.array(padded),
+    )
     co = coefficients(fb)
     tx = transmission_extremes(fb)
-    return {
+    values = {
         "K_omega": co["K_omega"],
         "K_epsilon": co["K_epsilon"],
         "K_p": co["K_p"],
@@ -106,6 +123,7 @@ def _fourbar_values(L1: float, L2: float, L3s: list[float], L4: float) -> dict[s
         "nu_reinsberg": np.degrees(tx["max"]) - 90.0,
         "psi_deg": np.degrees(co["psi"]),
     }
+    return [{k: v[i, : len(r[2])] for k, v in values.items()} for i, r in enumerate(rows)]
 
 
 def reproduce_planar() -> list[Cell]:
@@ -128,26 +146,35 @@ def reproduce_planar() -> list[Cell]:
             )
         )
 
-    for L4, L3, kw, ke, kp in TABLE1_PLANAR:
+    def interval(L3: str) -> list[float]:
         l3 = float(L3)
-        v = _fourbar_values(1.0, 5.0, [l3, l3 - half_ulp(L3), l3 + half_ulp(L3)], L4)
+        return [l3, l3 - half_ulp(L3), l3 + half_ulp(L3)]
+
+    # The paper's Table 4 L3 is the formula's, printed rounded; some rows were evidently
+    # computed with the rounded value, so both (and its rounding interval) are admissible.
+    table4 = [(L1, L2, math.sqrt(1.0 + L1**2 - L2**2), L3) for L2, L1, L3, *_ in TABLE4]
+    values = iter(
+        _fourbar_values(
+            [(1.0, 5.0, interval(L3), L4) for L4, L3, *_ in TABLE1_PLANAR]
+            + [(1.0, 5.0, interval(L3), L4) for L4, L3, *_ in TABLE2_PLANAR]
+            + [(L1, L2, [exact, *interval(L3)], 1.0) for L1, L2, exact, L3 in table4]
+        )
+    )
+    for L4, L3, kw, ke, kp in TABLE1_PLANAR:
+        v = next(values)
         row = f"L4={format_number(L4)}, L3={L3}"
         add("Table 1", row, "K_omega", kw, v["K_omega"])
         add("Table 1", row, "K_epsilon", ke, v["K_epsilon"])
         add("Table 1", row, "K_p", kp, v["K_p"])
     for L4, L3, nmax, nmin in TABLE2_PLANAR:
-        l3 = float(L3)
-        v = _fourbar_values(1.0, 5.0, [l3, l3 - half_ulp(L3), l3 + half_ulp(L3)], L4)
+        v = next(values)
         row = f"L4={format_number(L4)}, L3={L3}"
         add("Table 2", row, "nu_max", nmax, v["nu_max"])
         add("Table 2", row, "nu_min", nmin, v["nu_min"])
     for L2, L1, L3, kw, ke, kp, dl, nu in TABLE4:
+        v = next(values)
         exact = math.sqrt(1.0 + L1**2 - L2**2)
-        lp = float(L3)
         row = f"L2={format_number(L2)}, L1={format_number(L1)}"
-        # The paper's L3 is the formula's, printed rounded; some rows were evidently computed
-        # with the rounded value, so both (and its rounding interval) are admissible inputs.
-        v = _fourbar_values(L1, L2, [exact, lp, lp - half_ulp(L3), lp + half_ulp(L3)], 1.0)
         cells.append(
             Cell(
                 "Table 4",

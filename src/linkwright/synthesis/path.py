@@ -593,16 +593,18 @@ assembling at every target was found ...
         if stopped_now in ("target", "evaluations"):
             stopped = stopped_now
             break
-        local = LocalSearch(problem, starts, senses, deadline)
+        local = LocalSearch(problem, starts, senses, deadline, goal)
         local.levenberg_marquardt(LM_ITERATIONS)
         found = [local.candidate(k) for k in range(len(starts))]
         # The most promising few go on: valleys near a change point or a cusp are long.
         top = [k for k in np.argsort(local.best_obj)[:FURTHER] if found[k] is not None]
         if top:
-            more = LocalSearch(problem, [found[k] for k in top], [senses[k] for k in top], deadline)
+            more = LocalSearch(
+                problem, [found[k] for k in top], [senses[k] for k in top], deadline, goal
+            )
             more.levenberg_marquardt(LM_FURTHER)
             k = int(np.argmin(more.best_obj))
-            if more.best_obj[k] < best_objective * (1 + 1e-9):
+            if more.best_obj[k] < best_objective * (1 + 1e-9) and not more.reached():
                 more.polish(k)
             found += [more.candidate(k) for k in range(len(top))]
         for cand in found:

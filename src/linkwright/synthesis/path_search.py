@@ -127,11 +127,19 @@ class LocalSearch:
     """
 
     def __init__(
-        self, problem: Problem, starts: list[Candidate], senses: list[float], deadline: float
+        self,
+        problem: Problem,
+        starts: list[Candidate],
+        senses: list[float],
+        deadline: float,
+        goal: float = 0.0,
     ) -> None:
         p = self.p = problem
         m = p.model
         self.deadline = deadline
+        # An error the caller counts as an exact fit: once a start reaches it, the others'
+        # iterations would only be spent (a close template would otherwise run to the budget).
+        self.goal = goal
         self.assembly = np.array([c.assembly for c in starts])
         self.sense = np.array(senses, float)
         self.sphere = m.space == "sphere"
@@ -330,7 +338,7 @@ class LocalSearch:
         live = np.ones(K, bool)
         eye = np.eye(n)
         for _ in range(iterations):
-            if time.perf_counter() > self.deadline or not live.any():
+            if time.perf_counter() > self.deadline or not live.any() or self.reached():
                 break
             rows = np.flatnonzero(live)
             Jr, Rr, Zr = J[rows], R[rows], Z[rows]
@@ -368,6 +376,10 @@ class LocalSearch:
             live[rows[(lam[rows] > 1e10) | (accept & small)]] = False
             if acc_rows.size:
                 J[acc_rows] = self._jacobians(Z[acc_rows], acc_rows, R[acc_rows], V[acc_rows])
+
+    def reached(self) -> bool:
+        """Whether some start's best feasible point already fits to the goal."""
+        return bool(np.any(self.best_err <= self.goal))
 
     def polish(self, k: int, max_nfev: int = 200) -> None:
         """Finish start k with :func:`scipy.optimize.least_squares` (trust region, bounds)."""
