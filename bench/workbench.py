@@ -141,7 +141,7 @@ _REDRAW = """async ([path, value]) => {
         });
     });
     field.value = String(value);
-    field.dispatchEvent(new Event('input', {bubbles: true}));
+    field.dispatchEvent(new Event('change', {bubbles: true}));
     return (await drawn) - t0;
 }"""
 

@@ -19,11 +19,13 @@ FAMILY_EXAMPLES = {
 INPUT_EXAMPLES = {
     "stephenson3-output": "stephenson3-output",
     "spherical-stephenson3-fg": "paper001-fg",
+    "linkage-hinge": "hinge-driven-fourbar",
 }
 
 _FAMILY_OF_INPUT = {
     "stephenson3-output": "stephenson3",
     "spherical-stephenson3-fg": "spherical-stephenson3",
+    "linkage-hinge": "linkage",
 }
 
 

@@ -26,7 +26,7 @@ from linkwright.io import document_to_dict, load_example, parse_document
 from linkwright.mechanisms import circuits, configurations, solve
 
 _evaluate = importlib.import_module("linkwright.engine.evaluate")
-_circuits = importlib.import_module("linkwright.engine.circuits")
+_limit_search = importlib.import_module("linkwright.engine.limit_search")
 
 
 @contextmanager
@@ -41,7 +41,7 @@ def counted() -> Iterator[dict[str, float]]:
         tally["calls"] += 1
         return theta, states
 
-    patched = [(_evaluate, "place_all"), (_circuits, "place_all")]
+    patched = [(_evaluate, "place_all"), (_limit_search, "place_all")]
     for module, name in patched:
         setattr(module, name, place_all)
     try:

@@ -65,6 +65,7 @@ ROW_NAMES = {
     "spherical-stephenson3-fg": "spherical Stephenson III driven at FG (a spherical triad)",
     "linkage-plane": "composed linkage, plane",
     "linkage-sphere": "composed linkage, sphere",
+    "linkage-hinge": "composed linkage driven at a moving hinge",
 }
 """How docs/cli.md's table names each row."""
 

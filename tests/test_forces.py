@@ -314,8 +314,8 @@ def test_every_planar_family_has_bodies_from_its_plan():
     assert f.valid.all() and len(structure(jansen.plan).bodies) == 11
 
 
-def test_spherical_forces_are_refused_plainly():
-    from linkwright.dynamics import UnsupportedPlan
-
-    with pytest.raises(UnsupportedPlan, match="sphere"):
-        structure(load_example("paper001-fg").mechanism.plan)
+def test_spherical_plans_have_bodies_too():
+    """Paper 001's linkage driven at FG (a spherical triad): its bodies, by the same rules."""
+    s = structure(load_example("paper001-fg").mechanism.plan)
+    assert s.space == "sphere" and s.pivot == "G"
+    assert [len(b.joints) for b in s.bodies] == [2, 2, 2, 2, 3]

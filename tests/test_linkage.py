@@ -412,7 +412,7 @@ def test_params_plan_and_joints():
     listed = Linkage(joints=[FixedJoint("O", [0, 0]), CrankJoint("A", "O", 1)], traced="O")
     assert isinstance(listed.joints, tuple) and listed.traced == ("O",)
     assert mech == fourbar_linkage([0, 0], [4, 0], 1, 5, 3.5, u=2, v=1, assembly=-1)
-    assert set(JOINT_TYPES) == {"fixed", "crank", "rrr", "rrp", "rigid"}
+    assert set(JOINT_TYPES) == {"fixed", "crank", "rrr", "rrp", "rigid", "hinge"}
 
 
 def test_with_assembly_and_configurations():
@@ -491,7 +491,7 @@ BAD = [
         "under-constrained)",
     ),
     ((O, CrankJoint("A", "A", 1)), None, "joint 'A' is built from itself (pivot)"),
-    ((O, Q), None, "nothing drives the linkage: none of its joints is a crank (under-constrained)"),
+    ((O, Q), None, "nothing drives the linkage: none of its joints is a crank or a driven hinge"),
     (
         (O, A, DyadJoint("B", "A", 2, "A", 3)),
         None,
@@ -607,6 +607,8 @@ GOOD = {
     "r1": st.floats(0.2, 4),
     "r2": st.floats(0.2, 4),
     "r": st.floats(0.2, 4),
+    "a": st.floats(0.2, 4),
+    "b": st.floats(0.2, 4),
     "ratio": st.sampled_from([1.0, -1.0, 2.0, 0.5]),
     "phase": st.floats(-4, 4),
     "line_angle": st.floats(-4, 4),
@@ -628,6 +630,8 @@ def random_joint_lists(draw):
         for field_name in names:
             if field_name == "name":
                 kwargs[field_name] = f"J{i}"
+            elif field_name == "far":  # a driven hinge places a second joint, a new name
+                kwargs[field_name] = f"J{i}far"
             elif field_name in GOOD:
                 kwargs[field_name] = draw(GOOD[field_name])
             else:  # a parent: distinct ones, all placed before

@@ -53,14 +53,6 @@ def test_import_linkwright_loads_nothing_heavy() -> None:
     assert out.stdout.strip() == "[]"
 
 
-# Known gap, listed so that it shrinks: these classes' docstrings still need an Examples section.
-CLASSES_WITHOUT_EXAMPLES = frozenset(
-    {
-        "Document",
-    }
-)
-
-
 def _public_callables() -> list[tuple[str, object]]:
     found = []
     for name in lw.__all__:
@@ -82,8 +74,6 @@ def test_every_public_callable_has_a_numpydoc_docstring_with_examples(
     name: str, value: object
 ) -> None:
     doc = inspect.getdoc(value) or ""
-    if inspect.isclass(value) and name in CLASSES_WITHOUT_EXAMPLES:
-        pytest.xfail(f"{name}: its class docstring has no Examples yet (issue 23, item 1)")
     assert ">>>" in doc and "Examples\n--------" in doc, f"{name}: no Examples section"
     if inspect.isfunction(value):
         for section in ("Parameters\n----------", "Returns\n-------"):

@@ -185,8 +185,12 @@ def test_fourbar_derivatives_match_differences(a1, a2, a3, a4, pa, pu, sign):
         rounding = (1e-14 * weight / h[:, None] ** order)[keep]
         for name in ("A", "B", "P"):
             err = np.abs(fd[name] - derivs[name])[keep]
-            scale = 1.0 + np.abs(derivs[name][keep])
-            assert np.all(err <= 1e-6 * scale + rounding), (name, order, err.max())
+            # The stencil's truncation error is a vector's (its higher derivatives'), so each
+            # component is held to the whole vector's size: a small component of a large
+            # acceleration carries the same absolute error (seen: 1.5e-6 on a component of
+            # 1.3 where the vector was 115).
+            size = np.linalg.norm(derivs[name][keep], axis=-1, keepdims=True)
+            assert np.all(err <= 1e-6 * (1.0 + size) + rounding), (name, order, err.max())
 
 
 @settings(max_examples=40)

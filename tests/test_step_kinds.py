@@ -276,7 +276,9 @@ def test_residual_is_rounding_when_solved_and_sees_a_displacement(mech, step):
     # The chosen displacement puts exactly delta into one constraint (a link, arc, guide or
     # frame); the residual is the largest error, so it sees at least that, to first order.
     assert np.all(seen >= delta * (1.0 - 1e-6)), (name, seen.min() / delta)
-    if not isinstance(step, Triad | SphereTriad):
+    # A step placing several joints (a triad, a driven hinge) couples its constraints: one
+    # joint moved shows in several of them, by up to a link ratio, so only the floor holds.
+    if not hasattr(step, "max_poses"):
         assert np.all(seen <= delta * (1.0 + 1e-6)), (name, seen.max() / delta)
 
 

@@ -30,22 +30,26 @@ from linkwright.mechanisms.parameters import parameter_vector
 
 TOLERANCE = 1e-6
 
-# (family, example, template?, budget): named families search from the bounds alone; a composed
-# linkage keeps its template's structure, so it starts from a template one percent off the
-# example; a family with a triad too (its search is the costliest: every pose at every sample).
+# (family, example, template?, evaluations): named families search from the bounds alone; a
+# composed linkage keeps its template's structure, so it starts from a template one percent off
+# the example; a family with a triad too (its search is the costliest: every pose at every
+# sample). The searches stop on an evaluation count, the same on any machine (a time budget
+# stops a busy one earlier: seen failing under load); the counts are a few times what each
+# needed to reach its exact fit (stephenson1 140,000; the others 1,200–56,000), and Watt II's
+# fit meets the tolerance long before its exact-fit target.
 CASES = [
-    ("slidercrank", "offset-slider-crank", False, 10),
-    ("doubleslider", "elliptic-trammel", False, 10),
-    ("watt1", "watt1-example", False, 10),
-    ("watt2", "watt2-example", False, 10),
-    ("stephenson1", "stephenson1-example", False, 10),
-    ("stephenson3", "stephenson3-example", False, 10),
-    ("stephenson3", "stephenson3-output", True, 30),
-    ("linkage", "jansen-leg", True, 10),
-    ("linkage", "paper000-fig6-linkage", True, 10),
-    ("spherical-sixbar", "paper000-fig8-sixbar", False, 10),
-    ("spherical-stephenson3", "paper001-stephenson3", False, 10),
-    ("spherical-stephenson3", "paper001-fg", True, 30),
+    ("slidercrank", "offset-slider-crank", False, 100_000),
+    ("doubleslider", "elliptic-trammel", False, 100_000),
+    ("watt1", "watt1-example", False, 200_000),
+    ("watt2", "watt2-example", False, 400_000),
+    ("stephenson1", "stephenson1-example", False, 400_000),
+    ("stephenson3", "stephenson3-example", False, 300_000),
+    ("stephenson3", "stephenson3-output", True, 20_000),
+    ("linkage", "jansen-leg", True, 100_000),
+    ("linkage", "paper000-fig6-linkage", True, 100_000),
+    ("spherical-sixbar", "paper000-fig8-sixbar", False, 200_000),
+    ("spherical-stephenson3", "paper001-stephenson3", False, 100_000),
+    ("spherical-stephenson3", "paper001-fg", True, 20_000),
 ]
 
 
@@ -99,9 +103,9 @@ def _polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarray:
     return np.sqrt(np.min(np.sum(gap * gap, -1), axis=1))
 
 
-@pytest.mark.parametrize(("family", "example", "with_template", "budget"), CASES)
+@pytest.mark.parametrize(("family", "example", "with_template", "evaluations"), CASES)
 def test_synth_path_fits_points_of_a_known_linkage(
-    tmp_path, family, example, with_template, budget
+    tmp_path, family, example, with_template, evaluations
 ):
     known = load_example(example).mechanism
     points, inputs = _segment_targets(known)
@@ -112,7 +116,8 @@ def test_synth_path_fits_points_of_a_known_linkage(
     csv = tmp_path / "points.csv"
     np.savetxt(csv, points, delimiter=",")
     args = ["synth", "path", "--family", family, "--points", str(csv), "--json", "--quiet",
-            "--angles", ",".join(f"{a:.12f}" for a in angles), "--budget", str(budget)]  # fmt: skip
+            "--angles", ",".join(f"{a:.12f}" for a in angles), "--budget", "600",
+            "--evaluations", str(evaluations)]  # fmt: skip
     if with_template:
         template = tmp_path / "template.toml"
         save_document(mechanism_to_dict(_nudged(known)), template)

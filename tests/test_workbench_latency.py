@@ -14,10 +14,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from linkwright.engine import arc_search, continuation
 from linkwright.engine import circuits as circuits_mod
-from linkwright.engine import continuation
-from linkwright.engine.circuits import _bisect, input_arcs, trace
+from linkwright.engine.circuits import input_arcs, trace
 from linkwright.engine.continuation import every_circuit, memo_key
+from linkwright.engine.limit_search import bisect_brackets
 from linkwright.engine.shared import share_arcs, share_samples
 from linkwright.io import document_to_dict, load_example
 from linkwright.server import scene as scene_mod
@@ -66,7 +67,7 @@ def test_bisection_in_batches_takes_the_steps_one_at_a_time(brackets, wiggle) ->
             ahead ^= np.sin((k + 2) * 1e3 * mid) > 0.9
         return ahead
 
-    got = _bisect(a.copy(), b.copy(), go_right)
+    got = bisect_brackets(a.copy(), b.copy(), go_right)
     want = _sequential(a.copy(), b.copy(), go_right)
     np.testing.assert_array_equal(got[0], want[0])
     np.testing.assert_array_equal(got[1], want[1])
@@ -96,7 +97,7 @@ def test_scene_walks_the_circuits_of_every_assembly_mode_once(monkeypatch) -> No
     # A spherical six-bar draws four assembly modes and the diagrams of its own: its circuits
     # were walked five times (each mode, then the own mode again with derivatives).
     _forget()
-    walks = _counting(monkeypatch, circuits_mod, "_walk")
+    walks = _counting(monkeypatch, circuits_mod, "walk_circuit")
     s = scene(_changed("paper000-fig8-sixbar"), samples=60)
     assert len(s["modes"]) == 4 and s["diagrams"] is not None
     assert walks[0] == 1
@@ -236,7 +237,7 @@ def test_geared_linkages_are_not_searched_ahead_of_the_budget(monkeypatch) -> No
         ]
 
     _forget()
-    searches = _counting(monkeypatch, circuits_mod, "_numeric_arcs")
+    searches = _counting(monkeypatch, arc_search, "numeric_arcs")
     share_arcs(plan, linkages(1000.0), points=points)
     assert searches[0] == 0
     share_arcs(plan, linkages(1.0), points=points)

@@ -6,8 +6,8 @@
   the spherical linkages, a :class:`Linkage` composed joint by joint);
 * the verbs on them: :func:`solve` (positions and derivatives at given inputs),
   :func:`configurations` (every assembly mode), :func:`circuit` and :func:`circuits` (the closed
-  motion as the machine runs), :func:`input_range` (where the input may go), :func:`analyze`
-  and :func:`classify`;
+  motion as the machine runs), :func:`input_range` (where the input may go), :func:`analyze`,
+  :func:`classify` and :func:`instant_centres`;
 * pictures: :func:`plot_mechanism`, :func:`plot_diagram`, :func:`animate`, :func:`save_figure`
   (each plot draws into a given matplotlib ``ax=`` or makes its own figure);
 * documents: :func:`load_document`, :func:`save_document`, :func:`load_example`,
@@ -70,6 +70,7 @@ _WHERE: dict[str, str] = {
     "FixedJoint": "linkwright.mechanisms",
     "CrankJoint": "linkwright.mechanisms",
     "DyadJoint": "linkwright.mechanisms",
+    "HingeJoint": "linkwright.mechanisms",
     "SliderJoint": "linkwright.mechanisms",
     "RigidJoint": "linkwright.mechanisms",
     "SphereCrankJoint": "linkwright.mechanisms",
@@ -91,6 +92,7 @@ _WHERE: dict[str, str] = {
     # Analysis.
     "analyze": "linkwright.analysis",
     "classify": "linkwright.analysis",
+    "instant_centres": "linkwright.analysis",
     # Pictures.
     "plot_mechanism": "linkwright.plot",
     "plot_diagram": "linkwright.plot",
@@ -126,6 +128,7 @@ __all__ = [
     "FixedJoint",
     "FourBar",
     "GearedFiveBar",
+    "HingeJoint",
     "InputArcs",
     "InvalidLinkage",
     "InvalidMechanism",
@@ -158,6 +161,7 @@ __all__ = [
     "fit_path",
     "four_pose_fourbar",
     "input_range",
+    "instant_centres",
     "list_examples",
     "load_document",
     "load_example",
@@ -199,7 +203,7 @@ _display.renderer = _render_svg
 
 if TYPE_CHECKING:  # what the names are, for type checkers and editors (never run)
     from linkwright import atlas
-    from linkwright.analysis import analyze, classify
+    from linkwright.analysis import analyze, classify, instant_centres
     from linkwright.engine import InputArcs, Motion
     from linkwright.io import (
         Document,
@@ -217,6 +221,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers and editors (never ru
         FixedJoint,
         FourBar,
         GearedFiveBar,
+        HingeJoint,
         InvalidLinkage,
         InvalidMechanism,
         Linkage,

@@ -169,6 +169,7 @@ def test_edit_a_field_redraws_the_curve(page: Any, server_url: str) -> None:
     curve0 = page.evaluate("lw.scene().modes.find(m => m.own).circuits[0].positions.P")
     before = _scenes(page)
     page.fill("[data-path='mechanism.crank']", "1.25")
+    page.press("[data-path='mechanism.crank']", "Enter")
     _settle(page, before)
     scene = page.evaluate("lw.scene()")
     assert scene["document"]["mechanism"]["crank"] == 1.25
@@ -193,6 +194,7 @@ def test_bad_value_shows_a_clear_error(page: Any, server_url: str) -> None:
     _open(page, server_url, "crank-rocker")
     count = _scenes(page)
     page.fill("[data-path='mechanism.coupler']", "-2")
+    page.press("[data-path='mechanism.coupler']", "Enter")
     page.wait_for_function("document.getElementById('status').dataset.kind === 'error'")
     _settle(page)
     message = page.inner_text("#status")
@@ -205,6 +207,7 @@ def test_bad_value_shows_a_clear_error(page: Any, server_url: str) -> None:
     # a linkage that cannot assemble anywhere is not an error: the drawing says why
     before = _scenes(page)
     page.fill("[data-path='mechanism.coupler']", "0.5")
+    page.press("[data-path='mechanism.coupler']", "Enter")
     _settle(page, before)
     assert page.get_attribute("#status", "data-kind") == "info"
     msg = page.locator("#canvas-message")
@@ -213,6 +216,7 @@ def test_bad_value_shows_a_clear_error(page: Any, server_url: str) -> None:
 
     before = _scenes(page)
     page.fill("[data-path='mechanism.coupler']", "5")
+    page.press("[data-path='mechanism.coupler']", "Enter")
     _settle(page, before)
     assert not msg.is_visible()
     expect(page.locator("#fields .invalid")).to_have_count(0)

@@ -3,7 +3,8 @@
 :func:`analyze` gathers them into one typed result in radians (:mod:`.results`): paper 003's
 analysis for four-bars (planar and spherical) and slider-cranks, the general one for every other
 family. :func:`linkwright.io.report.analysis_report` renders it in degrees and words for
-``linkwright analyze``.
+``linkwright analyze``. :func:`instant_centres` gives the instant centres of a planar linkage's
+bodies (all six of a four-bar) and the instantaneous axes of a spherical one's.
 """
 
 from __future__ import annotations
@@ -17,6 +18,12 @@ from linkwright.analysis.conic import (
     normalise_conic,
 )
 from linkwright.analysis.general import dyad_transmission_angles, point_speed
+from linkwright.analysis.instant_centres import (
+    InstantCentres,
+    RigidBody,
+    instant_centres,
+    rigid_bodies,
+)
 from linkwright.analysis.planar import (
     coefficients,
     fourbar_class,
@@ -65,10 +72,12 @@ __all__ = [
     "Extremes",
     "FourBarAnalysis",
     "GeneralAnalysis",
+    "InstantCentres",
     "InvalidHingeRatio",
     "Locking",
     "NotASphericalFourBar",
     "PressureComponents",
+    "RigidBody",
     "TracedPath",
     "TriadLimit",
     "analyze",
@@ -85,6 +94,7 @@ __all__ = [
     "grashof",
     "grashof_terms",
     "input_limits",
+    "instant_centres",
     "normalise_conic",
     "output_angle",
     "output_extremes",
@@ -95,6 +105,7 @@ __all__ = [
     "point_speed",
     "pressure_angles",
     "pressure_extremes",
+    "rigid_bodies",
     "slidercrank_class",
     "spherical_class",
     "stroke",

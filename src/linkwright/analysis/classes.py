@@ -63,17 +63,15 @@ def classify(mechanism: Mechanism) -> str | None:
             f"classify: one mechanism at a time, got a batch of shape {mechanism.batch_shape} "
             "(fourbar_class and the like classify batches)"
         )
-    if isinstance(mechanism, SphericalFourBar):
-        rule = spherical_class
-    elif isinstance(mechanism, FourBar):
-        rule = fourbar_class  # type: ignore[assignment]
-    elif isinstance(mechanism, SliderCrank):
-        rule = slidercrank_class  # type: ignore[assignment]
-    else:
+    if not isinstance(mechanism, SphericalFourBar | FourBar | SliderCrank):
         raise ValueError(
             f"classify: a {mechanism.family} has no named motion classes; analyze() says "
             "whether its input turns fully"
         )
     if bool(input_range(mechanism).never):
         return None
-    return str(rule(mechanism))  # type: ignore[arg-type]
+    if isinstance(mechanism, SphericalFourBar):
+        return str(spherical_class(mechanism))
+    if isinstance(mechanism, FourBar):
+        return str(fourbar_class(mechanism))
+    return str(slidercrank_class(mechanism))

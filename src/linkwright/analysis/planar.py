@@ -86,7 +86,7 @@ def grashof(fb: FourBar) -> Array:
     return excess
 
 
-def fourbar_class(fb: FourBar) -> NDArray[np.str_]:
+def fourbar_class(fb: FourBar | SphericalFourBar) -> NDArray[np.str_]:
     """Name of each four-bar's type, from Grashof's condition and which link is shortest.
 
     Grashof (s + l < p + q): shortest crank → ``crank-rocker``; shortest frame → ``double-crank``

@@ -43,6 +43,11 @@ HALF_PRECISION_FROM = 30_000_000
 TARGET_RECALL = 0.97
 _SEED = 1234
 
+Floats = NDArray[np.floating[Any]]
+"""Descriptors and distances: float32 where FAISS holds or returns them, float64 in NumPy."""
+Ids = NDArray[np.int64]
+"""Rows of an atlas (−1: no neighbour)."""
+
 
 def _faiss() -> Any | None:
     try:
@@ -56,7 +61,9 @@ def faiss_available() -> bool:
     return _faiss() is not None
 
 
-def merge_variants(dist: NDArray, ids: NDArray, variants: int, k: int) -> tuple[NDArray, NDArray]:
+def merge_variants(
+    dist: Floats, ids: Ids, variants: int, k: int
+) -> tuple[NDArray[np.float64], Ids]:
     """Per query, the k nearest distinct ids over its variants' answers (rows of ``dist`` and
     ``ids`` grouped ``variants`` at a time), each at its least distance. Missing → id −1."""
     q = dist.shape[0] // variants
@@ -81,7 +88,7 @@ class _TopK:
         self.dist = np.full((queries, 0), np.inf)
         self.ids = np.zeros((queries, 0), dtype=np.int64)
 
-    def add(self, dist: NDArray, ids: NDArray) -> None:
+    def add(self, dist: Floats, ids: Ids) -> None:
         d = np.concatenate([self.dist, dist], axis=1)
         i = np.concatenate([self.ids, ids], axis=1)
         order = np.lexsort((i, d), axis=1)[:, : self.k]
@@ -89,7 +96,7 @@ class _TopK:
         self.ids = np.take_along_axis(i, order, 1)
 
 
-def exact_search(vectors: NDArray, queries: NDArray, k: int) -> tuple[NDArray, NDArray]:
+def exact_search(vectors: Floats, queries: Floats, k: int) -> tuple[NDArray[np.float64], Ids]:
     """Squared distances and ids of the k nearest rows of ``vectors`` (N, D) to each query
     (Q, D), by brute force in float64 (ties by the smaller id).
 
@@ -112,11 +119,11 @@ def exact_search(vectors: NDArray, queries: NDArray, k: int) -> tuple[NDArray, N
     return np.maximum(best.dist, 0.0), best.ids
 
 
-def _f32(block: NDArray) -> NDArray[np.float32]:
+def _f32(block: Floats) -> NDArray[np.float32]:
     return np.ascontiguousarray(block, dtype=np.float32)
 
 
-def _rows(parts: list[NDArray], rows: NDArray) -> NDArray[np.float32]:
+def _rows(parts: list[Floats], rows: Ids) -> NDArray[np.float32]:
     """Rows at global positions ``rows`` (sorted) of the blocks taken end to end."""
     starts = np.cumsum([0] + [len(b) for b in parts])
     out = []
@@ -128,8 +135,8 @@ def _rows(parts: list[NDArray], rows: NDArray) -> NDArray[np.float32]:
 
 
 def exact_blocks(
-    blocks: Sequence[NDArray] | NDArray, queries: NDArray, k: int
-) -> tuple[NDArray, NDArray]:
+    blocks: Sequence[Floats] | Floats, queries: Floats, k: int
+) -> tuple[NDArray[np.float64], Ids]:
     """:func:`exact_search` over blocks taken end to end (FAISS's flat search per block where
     it is installed — it computes the few-query distances directly — else NumPy), one block in
     memory at a time."""
@@ -150,7 +157,7 @@ def exact_blocks(
     return best.dist, best.ids
 
 
-def recall_at(found: NDArray, truth: NDArray) -> float:
+def recall_at(found: Ids, truth: Ids) -> float:
     """Mean fraction of each row of ``truth`` (ids) that ``found`` holds."""
     hits = [np.intersect1d(f[f >= 0], t[t >= 0]).size / max(1, (t >= 0).sum())
             for f, t in zip(found, truth, strict=True)]  # fmt: skip
@@ -176,7 +183,7 @@ class Index:
         return int(self.handle.ntotal) if hasattr(self.handle, "ntotal") else len(self.handle)
 
     @classmethod
-    def build(cls, blocks: Sequence[NDArray] | NDArray, *, kind: str | None = None) -> Index:
+    def build(cls, blocks: Sequence[Floats] | Floats, *, kind: str | None = None) -> Index:
         """An index over the rows of ``blocks`` (arrays (n_i, D) in order, e.g. each shard's
         descriptors, memory-mapped: one block at a time is read, so memory stays bounded by the
         index itself): exact up to :data:`EXACT_UP_TO` rows, else IVF."""
@@ -211,7 +218,7 @@ class Index:
         return cls("ivf", ivf, nprobe=1)
 
     def tune(
-        self, blocks: Sequence[NDArray] | NDArray, queries: NDArray, variants: int, k: int = 10
+        self, blocks: Sequence[Floats] | Floats, queries: Floats, variants: int, k: int = 10
     ) -> float:
         """Choose the least power-of-two ``nprobe`` whose recall@k (over variant sets of
         ``queries``, (Q·V, D)) against the exact search over ``blocks`` (as :meth:`build`)
@@ -228,7 +235,7 @@ class Index:
                 return recall
             probe *= 2
 
-    def search(self, queries: NDArray, variants: int, k: int) -> tuple[NDArray, NDArray]:
+    def search(self, queries: Floats, variants: int, k: int) -> tuple[NDArray[np.float64], Ids]:
         """(Q, k) squared distances and ids for queries given as (Q·V, D) variant rows."""
         q = np.ascontiguousarray(queries, dtype=np.float32)
         if isinstance(self.handle, np.ndarray):
@@ -247,7 +254,7 @@ class Index:
             faiss.write_index(self.handle, str(tmp))
 
     @classmethod
-    def load(cls, path: Path, kind: str, nprobe: int, vectors: NDArray | None = None) -> Index:
+    def load(cls, path: Path, kind: str, nprobe: int, vectors: Floats | None = None) -> Index:
         faiss = _faiss()
         if faiss is None or not Path(path).exists():
             if vectors is None:

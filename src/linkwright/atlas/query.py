@@ -30,7 +30,7 @@ from scipy.spatial import cKDTree
 
 from linkwright.atlas.atlas import Atlas
 from linkwright.atlas.families import CODE, atlas_model, curves, describe_variants
-from linkwright.curves import align, sphere_align
+from linkwright.curves import Alignment, SphereAlignment, align, sphere_align
 from linkwright.engine import cost
 from linkwright.mechanisms import Mechanism, solve
 from linkwright.synthesis.path_families import Model, rodrigues, sphere_rotation
@@ -121,7 +121,9 @@ def _to_sphere_pose(R: Array) -> tuple[float, float, float]:
     return lon, float(np.clip(a0[2], -1.0, 1.0)), float(np.arctan2(t @ north, t @ east))
 
 
-def _placed_params(model: Any, design: dict[str, float], fit, k: int) -> dict[str, float]:
+def _placed_params(
+    model: Any, design: dict[str, float], fit: Alignment | SphereAlignment, k: int
+) -> dict[str, float]:
     """The atlas design ``design`` carried by alignment ``fit`` (entry k) into the query frame,
     as fit_path's parameters."""
     out = dict(design)
@@ -129,6 +131,7 @@ def _placed_params(model: Any, design: dict[str, float], fit, k: int) -> dict[st
         lon, sinlat, spin = _to_sphere_pose(fit.rotation[k])
         out.update(lon=lon, sinlat=sinlat, spin=spin)
         return out
+    assert isinstance(fit, Alignment)  # a planar model's fit is planar
     s = float(fit.scale[k])
     for name in model.linear:
         if name in design:
@@ -177,9 +180,10 @@ class _Placed:
     def points(self, inputs: Array) -> Array:
         if isinstance(self.model, Model):
             return solve(self.user, inputs, order=0).positions["P"]
-        return self.model.reach(
+        traced: Array = self.model.reach(
             self.user, self.local, self.code, inputs, self.offset, self.transform
         )[0]
+        return traced
 
     def curve(self, samples: int) -> tuple[Array, Array]:
         """Inputs over one period of the input (from the frame's 0) and the traced points."""
@@ -204,7 +208,9 @@ def _distance(points: Array, curve: Array) -> float:
     return float(np.sqrt(np.mean(best)))
 
 
-def _aligned(space: str, curve: Array, target: Array, samples: int = RANK_SAMPLES):
+def _aligned(
+    space: str, curve: Array, target: Array, samples: int = RANK_SAMPLES
+) -> Alignment | SphereAlignment:
     if space == "plane":
         return align(curve, target, samples=samples)
     return sphere_align(curve, target, samples=samples)
@@ -272,8 +278,7 @@ def query(
     size = _size(model.space, q)
     # The chosen curves, densely, carried by their transforms: what each placed linkage traces.
     dense = curves(family, {n: v[order] for n, v in designs.items()}, DISTANCE_SAMPLES, template)
-    is_sphere = model.space == "sphere"
-    if is_sphere:
+    if isinstance(fit, SphereAlignment):
         dense = np.einsum("kij,knj->kni", fit.rotation[order], dense)
     else:
         c, s = np.cos(fit.rotation[order]), np.sin(fit.rotation[order])
@@ -285,6 +290,14 @@ def query(
         design = {name: float(v[k]) for name, v in designs.items()}
         params = _placed_params(model, design, fit, int(k))
         placed = _Placed(model, params)
+        scale: float
+        rotation: float | Array
+        translation: Array | None
+        if isinstance(fit, SphereAlignment):
+            scale, rotation, translation = 1.0, np.array(fit.rotation[k]), None
+        else:
+            scale, rotation = float(fit.scale[k]), float(fit.rotation[k])
+            translation = np.array(fit.translation[k])
         matches.append(
             Match(
                 atlas_id=int(ids[k]),
@@ -292,9 +305,9 @@ def query(
                 named=placed.named,
                 error=float(fit.error[k]),
                 distance=_distance(q, dense[rank]),
-                scale=1.0 if is_sphere else float(fit.scale[k]),
-                rotation=np.array(fit.rotation[k]) if is_sphere else float(fit.rotation[k]),
-                translation=None if is_sphere else np.array(fit.translation[k]),
+                scale=scale,
+                rotation=rotation,
+                translation=translation,
                 descriptor_distance=float(dist[k]),
                 params=params,
             )
@@ -354,7 +367,8 @@ def thinned(points: Array, most: int) -> Array:
     """
     if len(points) <= most:
         return points
-    return points[np.linspace(0, len(points) - 1, most).round().astype(int)]
+    kept: Array = points[np.linspace(0, len(points) - 1, most).round().astype(int)]
+    return kept
 
 
 def _refine(
@@ -399,7 +413,9 @@ def _refine(
 
     def mechanism(x: Array) -> _Placed | None:
         par = params_of(x)
+        pose: Array | tuple[float, float, float]
         if sphere:
+            assert R0 is not None  # set above for a spherical model
             pose = R0 @ rodrigues(np.array([par["w0"], par["w1"], par["w2"]]))
         else:
             pose = (par["x"], par["y"], par["frame_angle"])
@@ -429,10 +445,10 @@ def _refine(
     for i in range(n_pts):
         sparsity[i * q.shape[1] : (i + 1) * q.shape[1], n_par + i] = True
     goal = tolerance * size
-    start = time.perf_counter()
+    began = time.perf_counter()
     z, best = z0, float(np.sqrt(np.mean(residuals(z0).reshape(n_pts, -1) ** 2) * q.shape[1]))
     bounds = (np.r_[lo, np.full(n_pts, -np.inf)], np.r_[hi, np.full(n_pts, np.inf)])
-    while best > goal and time.perf_counter() - start < budget:
+    while best > goal and time.perf_counter() - began < budget:
         cost.check_time()
         sol = least_squares(
             residuals, z, jac_sparsity=sparsity, bounds=bounds, method="trf", max_nfev=60,

@@ -211,6 +211,7 @@ def atlas_query(
         raise CliError(str(exc)) from None
     rows = []
     for rank, m in enumerate(matches, start=1):
+        transform: dict[str, Any]
         if m.translation is None:
             transform = {"rotation_matrix": np.asarray(m.rotation)}
         else:

@@ -243,7 +243,13 @@ SUMMARY_KEYS = ("max_configurations",)
 """Keys of ``solve``'s JSON that summarise every sample: written after the samples."""
 
 
-def _stream_json(degrees, chunk, compute, jsonable, out) -> None:
+def _stream_json(
+    degrees: Sequence[float],
+    chunk: int,
+    compute: Callable[[Sequence[float]], Mapping[str, Any]],
+    jsonable: Callable[[Any], Any],
+    out: IO[str],
+) -> None:
     summary: dict[str, int] = {}
     started = wrote = False
     for lo in range(0, max(len(degrees), 1), chunk):
@@ -267,7 +273,13 @@ def _stream_json(degrees, chunk, compute, jsonable, out) -> None:
     out.write("]" + tail + "}\n")
 
 
-def _stream_text(degrees, chunk, compute, render, out) -> None:
+def _stream_text(
+    degrees: Sequence[float],
+    chunk: int,
+    compute: Callable[[Sequence[float]], Mapping[str, Any]],
+    render: Callable[[Mapping[str, Any]], str],
+    out: IO[str],
+) -> None:
     with contextlib.ExitStack() as stack:
         spools: list[IO[str]] = []
         for lo in range(0, max(len(degrees), 1), chunk):
@@ -292,8 +304,8 @@ def _stream_text(degrees, chunk, compute, render, out) -> None:
                     out.write("\n" + rows)
                 else:
                     spools[i - 1].write("\n" + rows)
-        for spool in spools:
-            spool.seek(0)
-            while block := spool.read(1 << 20):
+        for held in spools:
+            held.seek(0)
+            while block := held.read(1 << 20):
                 out.write(block)
         out.write("\n")

@@ -110,7 +110,7 @@ def curve(
     head = f"{'input_deg':>10} " + " ".join(f"{c:>11}" for c in axes) + f" {'assembly':>9}"
     out.append(f"{'circuit':>7} {head}" if every else head)
     for k, deg, xy, asm in rows:
-        cells = [None] * len(axes) if xy is None else xy
-        line = f"{fmt_number(deg, 10, 3)} {' '.join(fmt_number(c) for c in cells)} {asm:>+9d}"
+        shown: list[float | None] = [None] * len(axes) if xy is None else xy
+        line = f"{fmt_number(deg, 10, 3)} {' '.join(fmt_number(c) for c in shown)} {asm:>+9d}"
         out.append(f"{k:>7} {line}" if every else line)
     sys.stdout.write("\n".join(out) + "\n")

@@ -48,7 +48,7 @@ GROUPS = ("synth", "atlas")
 
 
 def _command_name(info: Any) -> str:
-    return info.name or info.callback.__name__
+    return str(info.name or info.callback.__name__)
 
 
 app.registered_commands.sort(key=lambda info: COMMANDS.index(_command_name(info)))

@@ -59,22 +59,14 @@ def forces(
     as_json: JsonOpt = False,
     as_csv: Annotated[bool, typer.Option("--csv", help="Print CSV.")] = False,
 ) -> None:
-    """Driving torque, joint reactions, shaking force and moment, energies (planar linkages).
+    """Driving torque, joint reactions, shaking force and moment, energies (plane and sphere).
 
     Masses come from the document's [mechanism.mass] table, loads and speed from [loads]
     (docs/forces.md); units are the document's mass and length units and seconds (kg and m
     give N, N·m and J).
     """
     from linkwright.cli.shared import parse_inputs
-    from linkwright.dynamics import (
-        ForcesInputError,
-        UnsupportedPlan,
-        forces_of,
-        loads_from,
-        masses_from,
-        structure,
-    )
-    from linkwright.dynamics.model import check_speed
+    from linkwright.dynamics import ForcesInputError, UnsupportedPlan, forces_of, forces_setup
     from linkwright.engine import cost
     from linkwright.mechanisms.base import configurations, solve
 
@@ -86,21 +78,18 @@ def forces(
     doc = load_file(file)
     mech = doc.mechanism
     try:
-        st = structure(mech.plan)
+        st, masses, loads = forces_setup(
+            mech,
+            doc.raw["mechanism"].get("mass", {}),
+            doc.raw.get("loads"),
+            speed=speed,
+            speed_field="loads.speed (or --speed)",
+        )
     except UnsupportedPlan as exc:
         raise CliError(f"forces: {exc}") from None
-    params = mech.params()
-    lengths = {b.name: float(np.max(params[b.name])) for b in st.bodies if b.name in params}
-    try:
-        masses = masses_from(doc.raw["mechanism"].get("mass", {}), st, lengths)
-        loads = loads_from(doc.raw.get("loads"), st, mech.plan.joints)
-        if speed is not None:
-            from dataclasses import replace
-
-            loads = replace(loads, speed_rpm=float(speed))
-        check_speed(masses, loads, "loads.speed (or --speed)")
     except ForcesInputError as exc:
         raise CliError(str(exc)) from None
+    params = mech.params()
 
     # Bounded before the work: solving with derivatives, then one dense solve per sample.
     unknowns = 3 * len(st.bodies)
@@ -170,12 +159,15 @@ def _row(deg: float, branches: tuple[int, ...] | None, f: Forces, k: int) -> dic
     row["input_torque"] = _num(f.input_torque[k])
     row["energy_torque"] = _num(f.energy_torque[k])
     row["reactions"] = {n: [_num(v) for v in f.reactions[n][k]] for n in f.reactions}
+    if f.moments:
+        row["moments"] = {n: [_num(v) for v in f.moments[n][k]] for n in f.moments}
     if f.guides:
         row["guides"] = {n: [_num(v) for v in f.guides[n][k]] for n in f.guides}
     if f.gears:
         row["gears"] = {n: _num(f.gears[n][k]) for n in f.gears}
     row["shaking_force"] = [_num(v) for v in f.shaking_force[k]]
-    row["shaking_moment"] = _num(f.shaking_moment[k])
+    shaking = f.shaking_moment[k]
+    row["shaking_moment"] = _num(shaking) if np.ndim(shaking) == 0 else [_num(v) for v in shaking]
     row["kinetic_energy"] = _num(f.kinetic[k])
     row["potential_energy"] = _num(f.potential[k])
     return row
@@ -186,14 +178,20 @@ def _flat(row: Mapping[str, Any]) -> dict[str, Any]:
     if "assembly" in row:
         out["assembly"] = ",".join(f"{s:+d}" for s in row["assembly"])
     out["input_torque"] = row["input_torque"]
-    for name, (x, y) in row["reactions"].items():
-        out[f"{name}.x"], out[f"{name}.y"] = x, y
+    for name, force in row["reactions"].items():
+        out.update({f"{name}.{axis}": v for axis, v in zip("xyz", force, strict=False)})
+    for name, moment in row.get("moments", {}).items():
+        out.update({f"{name}.m{axis}": v for axis, v in zip("xyz", moment, strict=False)})
     for name, (n, m) in row.get("guides", {}).items():
         out[f"{name}.normal"], out[f"{name}.moment"] = n, m
     for name, t in row.get("gears", {}).items():
         out[f"{name}.gear_torque"] = t
-    out["shaking.x"], out["shaking.y"] = row["shaking_force"]
-    out["shaking_moment"] = row["shaking_moment"]
+    out.update({f"shaking.{a}": v for a, v in zip("xyz", row["shaking_force"], strict=False)})
+    moment = row["shaking_moment"]
+    if isinstance(moment, list):
+        out.update({f"shaking_moment.{a}": v for a, v in zip("xyz", moment, strict=False)})
+    else:
+        out["shaking_moment"] = moment
     out["kinetic_energy"] = row["kinetic_energy"]
     out["potential_energy"] = row["potential_energy"]
     return out

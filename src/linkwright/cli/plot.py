@@ -7,7 +7,7 @@ import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -21,7 +21,17 @@ from linkwright.cli.shared import (
     load_file,
 )
 
-PLOT_KINDS = ("linkage", "angles", "velocity", "acceleration", "coefficients")
+PLOT_KINDS = (
+    "linkage",
+    "angles",
+    "velocity",
+    "acceleration",
+    "coefficients",
+    "torque",
+    "reactions",
+    "shaking",
+)
+FORCE_KINDS = ("torque", "reactions", "shaking")
 PICTURE_SUFFIXES = (".png", ".svg", ".pdf")
 AtOpt = Annotated[
     float | None,
@@ -71,7 +81,8 @@ def plot(
             metavar="KIND",
             help="linkage (the linkage, its curves, limit positions, dead centres and "
             "transmission-angle extremes), angles, velocity, acceleration or coefficients "
-            "(diagrams against the input).",
+            "(diagrams against the input), torque, reactions or shaking (forces over the "
+            "circuit, from the document's [mechanism.mass] and [loads]: docs/forces.md).",
         ),
     ] = "linkage",
     at: AtOpt = None,
@@ -101,6 +112,9 @@ def plot(
     from linkwright.plot.diagrams import DiagramError, plot_diagram
     from linkwright.plot.view import PlotError, plot_mechanism
 
+    if kind in FORCE_KINDS:
+        _wrote(save_figure(_force_figure(doc, kind, samples, file), out))
+        return
     try:
         if kind == "linkage":
             figure = plot_mechanism(doc.mechanism, at=_at(at), samples=samples, title=doc.title)
@@ -109,6 +123,29 @@ def plot(
     except (PlotError, DiagramError) as exc:
         raise CliError(f"{file}: {exc}") from None
     _wrote(save_figure(figure, out))
+
+
+def _force_figure(doc: Any, kind: str, samples: int, file: str) -> Any:
+    """The force diagram of a document over its circuit (masses and loads from the document,
+    checked as ``linkwright forces`` checks them)."""
+    from linkwright.dynamics import ForcesInputError, UnsupportedPlan, forces_of, forces_setup
+    from linkwright.mechanisms.base import circuit
+    from linkwright.plot.forces import plot_forces
+
+    try:
+        st, masses, loads = forces_setup(
+            doc.mechanism, doc.raw["mechanism"].get("mass", {}), doc.raw.get("loads")
+        )
+    except UnsupportedPlan as exc:
+        raise CliError(f"forces: {exc}") from None
+    except ForcesInputError as exc:
+        raise CliError(str(exc)) from None
+    motion = circuit(doc.mechanism, samples)
+    result = forces_of(st, doc.mechanism.params(), motion, masses, loads)
+    # The document's mass unit (kg when none is named) and length unit: N·m and N for metres.
+    length = doc.units or "length"
+    units = ("N·m", "N") if doc.units == "m" else (f"mass·{length}²/s²", f"mass·{length}/s²")
+    return plot_forces(doc.mechanism, result, kind, title=doc.title, units=units)
 
 
 @app.command()
@@ -153,8 +190,9 @@ def export(
         typer.Option(
             "--out",
             metavar="X.csv|X.svg|X.dxf",
-            help="CSV: every joint's path over the circuit; SVG and DXF: the linkage at the "
-            "pose and its coupler curves, in the document's units.",
+            help="CSV: every joint's path over the circuit (and the forces, where the "
+            "document has masses or loads); SVG and DXF: the linkage at the pose and its "
+            "coupler curves, in the document's units.",
         ),
     ],
     at: AtOpt = None,
@@ -173,9 +211,28 @@ def export(
     from linkwright.io.exports import ExportError
     from linkwright.io.exports import export as write
 
+    forces = None
+    if out.suffix.lower() == ".csv" and (
+        doc.raw["mechanism"].get("mass") or doc.raw.get("loads") is not None
+    ):
+        # A document with masses or loads exports its forces beside the paths.
+        from linkwright.dynamics import ForcesInputError, UnsupportedPlan, forces_setup
+
+        try:
+            forces = forces_setup(
+                doc.mechanism, doc.raw["mechanism"].get("mass", {}), doc.raw.get("loads")
+            )
+        except (UnsupportedPlan, ForcesInputError) as exc:
+            raise CliError(f"{file}: forces: {exc}") from None
     try:
         path = write(
-            doc.mechanism, out, at=_at(at), samples=samples, units=doc.units, title=doc.title
+            doc.mechanism,
+            out,
+            at=_at(at),
+            samples=samples,
+            units=doc.units,
+            title=doc.title,
+            forces=forces,
         )
     except ExportError as exc:
         raise CliError(f"{file}: {exc}") from None

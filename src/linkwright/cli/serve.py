@@ -92,7 +92,9 @@ def _loopback(host: str) -> bool:
 
     try:
         infos = socket.getaddrinfo(host, None, type=socket.SOCK_STREAM)
-        return all(ipaddress.ip_address(info[4][0].split("%")[0]).is_loopback for info in infos)
+        return all(
+            ipaddress.ip_address(str(info[4][0]).split("%")[0]).is_loopback for info in infos
+        )
     except (OSError, ValueError):
         return False
 

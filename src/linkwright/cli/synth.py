@@ -582,6 +582,17 @@ def synth_path(
     budget: Annotated[
         float, typer.Option("--budget", metavar="SECONDS", min=0.1, max=86_400.0)
     ] = 10.0,
+    evaluations: Annotated[
+        int | None,
+        typer.Option(
+            "--evaluations",
+            metavar="N",
+            min=1,
+            max=100_000_000,
+            help="Stop after N mechanism evaluations (with --seed: the same result on any "
+            "machine, where --budget stops a slower one earlier).",
+        ),
+    ] = None,
     template: Annotated[
         str | None,
         typer.Option(
@@ -628,7 +639,7 @@ def synth_path(
             fit = fit_path(
                 family, pts, angles=given, timing=timing, closed=closed, bounds=bounds or None,
                 constraints=constraints, seed=seed, budget=budget, progress=progress,
-                template=like,
+                template=like, max_evaluations=evaluations,
             )  # fmt: skip
     except PathSynthesisError as exc:
         raise CliError(str(exc)) from None

@@ -44,6 +44,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -68,6 +69,8 @@ __all__ = [
 ]
 
 Array = NDArray[np.float64]
+Complex = NDArray[np.complex128]
+Index = NDArray[np.intp]
 
 DEFAULT_SAMPLES = 64
 DEFAULT_HARMONICS = 8
@@ -126,7 +129,7 @@ def resample(points: ArrayLike, samples: int = DEFAULT_SAMPLES, closed: bool = T
     return out.reshape(batch + (samples, 2))
 
 
-def locate(seg: Array, samples: int, closed: bool) -> tuple[Array, Array, Array]:
+def locate(seg: Array, samples: int, closed: bool) -> tuple[Index, Array, NDArray[np.bool_]]:
     """Where ``samples`` points equally spaced by length fall on polylines with segment
     lengths ``seg`` (C, S): the segment (C, samples), the fraction of it, and which rows have
     no length (a NaN, or all points equal)."""
@@ -153,7 +156,7 @@ def locate(seg: Array, samples: int, closed: bool) -> tuple[Array, Array, Array]
     return idx, w, bad
 
 
-def _fourier(points: ArrayLike, harmonics: int, closed: bool) -> Array:
+def _fourier(points: ArrayLike, harmonics: int, closed: bool) -> Complex:
     """(…, 2K) complex: Z_1 … Z_K, Z_−1 … Z_−K of the polygon through ``points`` (exact)."""
     p = _as_curves(points)
     if harmonics < 1:
@@ -183,7 +186,7 @@ def _fourier(points: ArrayLike, harmonics: int, closed: bool) -> Array:
     return out
 
 
-def closed_phases(pos: Array, neg: Array) -> tuple[Array, Array]:
+def closed_phases(pos: Complex, neg: Complex) -> tuple[Array, Array]:
     """The rotation φ and start shift σ (…, 4) of the four normalisations of a closed curve's
     coefficients ``pos`` = Z_1 …, ``neg`` = Z_−1 … (… , K): variants 0, 1 run forwards, 2, 3
     backwards (Z_n and Z_−n swapped); variant v's Z_k is then multiplied by e^{i(φ_v + k·σ_v)},
@@ -198,7 +201,7 @@ def closed_phases(pos: Array, neg: Array) -> tuple[Array, Array]:
     return np.stack(phi, axis=-1), np.stack(shift, axis=-1)
 
 
-def _normalised(coeffs: Array, harmonics: int, closed: bool) -> Array:
+def _normalised(coeffs: Complex, harmonics: int, closed: bool) -> Complex:
     """(…, V, 2K) complex (K for open curves): the harmonics of every variant, start point and
     rotation normalised."""
     n = np.arange(1, harmonics + 1)
@@ -209,14 +212,16 @@ def _normalised(coeffs: Array, harmonics: int, closed: bool) -> Array:
         sign = (-1.0) ** n
         variants = np.stack([pos, pos * sign], axis=-2)
         phase = np.exp(-1j * np.angle(variants[..., :1]))
-        return variants * phase
+        turned: Complex = variants * phase
+        return turned
     # Both directions: backwards swaps Z_n and Z_{−n}.
     forward = np.concatenate([pos, neg], axis=-1)
     backward = np.concatenate([neg, pos], axis=-1)
     z = np.stack([forward, forward, backward, backward], axis=-2)
     phi, shift = closed_phases(pos, neg)
     k = np.concatenate([n, -n])
-    return z * np.exp(1j * (phi[..., None] + k * shift[..., None]))
+    normalised: Complex = z * np.exp(1j * (phi[..., None] + k * shift[..., None]))
+    return normalised
 
 
 # Taylor coefficients ±1/n! of sin and cos (numba reads module-level numbers as constants).
@@ -228,7 +233,7 @@ _C2, _C4, _C6, _C8, _C10, _C12, _C14, _C16 = (
 )
 
 
-def _turn(t):
+def _turn(t: float) -> tuple[float, float]:
     """(cos, sin) of −2πt for t in [0, 1]: e^{−2πit}, to a few units in the last place, from
     polynomials alone, so that a loop of them vectorises (a libm call does not).
 
@@ -256,7 +261,7 @@ def _turn(t):
     return re, im
 
 
-def _descriptor_kernel(points, harmonics, closed, out):
+def _descriptor_kernel(points: Array, harmonics: int, closed: bool, out: Array) -> None:
     """The canonical descriptor of each curve (``points`` (count, n_points, 2)), as
     :func:`descriptors` defines it with NumPy: the same formulas, one curve at a time, no
     temporaries beyond one curve."""
@@ -381,12 +386,13 @@ def _descriptor_kernel(points, harmonics, closed, out):
                     out[c, k + n] = pi[n] * f
 
 
-def _energy_normalise(v: Array) -> Array:
+def _energy_normalise(v: Complex) -> Complex:
     with np.errstate(invalid="ignore", divide="ignore"):
-        return v / np.sqrt(np.sum(np.abs(v) ** 2, axis=-1, keepdims=True))
+        unit: Complex = v / np.sqrt(np.sum(np.abs(v) ** 2, axis=-1, keepdims=True))
+    return unit
 
 
-def _real(v: Array) -> Array:
+def _real(v: Complex) -> Array:
     return np.concatenate([v.real, v.imag], axis=-1)
 
 
@@ -474,7 +480,7 @@ def _descriptors_reference(
     return np.take_along_axis(v, choice[..., None, None], axis=-2)[..., 0, :]
 
 
-def closed_choice(v: Array, k: int) -> Array:
+def closed_choice(v: Array, k: int) -> Index:
     """Which of the four closed-curve variants (…, 4, D) is canonical (…,): their first 4K
     entries are Re Z_1 … Z_K, Re Z_−1 … Z_−K, then the imaginary parts, as
     :func:`descriptor_variants` lays them out."""
@@ -538,7 +544,7 @@ def refine_shift(evaluate: Callable[[Array], tuple[Array, Array]], whole: Array)
     return np.where(f_best >= f_whole, best, whole)
 
 
-def circular_correlation(spectrum: Array, shift: Array) -> tuple[Array, Array]:
+def circular_correlation(spectrum: Complex, shift: Array) -> tuple[Complex, Complex]:
     """c(s) = (1/M) Σ_n spectrum_n e^{2πi f_n s/M} (f_n the FFT's frequencies) and dc/ds, the
     band-limited correlation between samples, for ``spectrum`` (…, C, M) (C correlations
     sharing a shift) and ``shift`` (…): each (…, C)."""
@@ -550,7 +556,11 @@ def circular_correlation(spectrum: Array, shift: Array) -> tuple[Array, Array]:
     return out[..., 0], out[..., 1]
 
 
-def shifted_samples(x: Array, shift: Array, axis: int) -> Array:
+@overload
+def shifted_samples(x: Complex, shift: Array, axis: int) -> Complex: ...
+@overload
+def shifted_samples(x: Array, shift: Array, axis: int) -> Array: ...
+def shifted_samples(x: Complex | Array, shift: Array, axis: int) -> Complex | Array:
     """The samples of x(t − shift), band-limited between samples (x complex, or real and then
     the real part), over the sample axis ``axis`` (negative: counted from the end); ``shift``
     has the batch shape."""
@@ -562,7 +572,7 @@ def shifted_samples(x: Array, shift: Array, axis: int) -> Array:
     return out if np.iscomplexobj(x) else out.real
 
 
-def _best_correlation(spectrum: Array) -> tuple[Array, Array]:
+def _best_correlation(spectrum: Complex) -> tuple[Array, Complex]:
     """The shift s maximising |c(s)| (whole shifts by one inverse FFT, then refined between
     samples) and c(s) there."""
     whole = np.argmax(np.abs(np.fft.ifft(spectrum, axis=-1)), axis=-1).astype(float)
@@ -575,7 +585,9 @@ def _best_correlation(spectrum: Array) -> tuple[Array, Array]:
     return shift, circular_correlation(spectrum[..., None, :], shift)[0][..., 0]
 
 
-def start_fraction(forwards: Array, backwards: Array, reverse: Array, samples: int) -> Array:
+def start_fraction(
+    forwards: Array, backwards: Array, reverse: NDArray[np.bool_], samples: int
+) -> Array:
     """Where on the curve the target's first point lands, as a fraction of the curve's length
     from its first point along its own direction, given the best shifts (in samples) of the
     curve run forwards and backwards and which won."""

@@ -72,6 +72,7 @@ from numpy.typing import ArrayLike, NDArray
 from linkwright.curves.fourier import (
     DEFAULT_HARMONICS,
     DEFAULT_SAMPLES,
+    Complex,
     CurveError,
     circular_correlation,
     closed_choice,
@@ -116,7 +117,8 @@ def _as_sphere_curves(points: ArrayLike, normalise: bool = True) -> Array:
 
 def _unit(p: Array) -> Array:
     """Exactly unit vectors: the arc formulas assume them."""
-    return p / np.sqrt(np.einsum("...i,...i->...", p, p))[..., None]
+    unit: Array = p / np.sqrt(np.einsum("...i,...i->...", p, p))[..., None]
+    return unit
 
 
 def _arcs(p: Array, q: Array) -> tuple[Array, Array, Array]:
@@ -178,7 +180,7 @@ def sphere_resample(
     size = np.linalg.norm(toward, axis=-1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         toward = np.where(size > 0, toward / size, 0.0)
-    out = a * np.cos(along)[..., None] + toward * np.sin(along)[..., None]
+    out: Array = a * np.cos(along)[..., None] + toward * np.sin(along)[..., None]
     out[bad] = np.nan
     return out.reshape(batch + (samples, 3))
 
@@ -186,7 +188,7 @@ def sphere_resample(
 RESONANCE = 0.25  # |ω − 1| below which S⁻ is evaluated directly (module notes in _moments)
 
 
-def _moments(p: Array, harmonics: int) -> tuple[Array, Array, Array]:
+def _moments(p: Array, harmonics: int) -> tuple[Array, Array, Complex]:
     """Mean direction X_0 (C, 3), scatter matrix (C, 3, 3) and X_1 … X_K (C, K, 3) complex of
     the closed geodesic polygons through ``p`` (C, N, 3), exact (module docstring); NaN rows for
     curves with a NaN point, no length or an antipodal pair of neighbours.
@@ -204,7 +206,7 @@ def _moments(p: Array, harmonics: int) -> tuple[Array, Array, Array]:
     return mean, scatter, coeffs[:, :, 0] + 1j * coeffs[:, :, 1]
 
 
-def _moments_reference(p: Array, harmonics: int) -> tuple[Array, Array, Array]:
+def _moments_reference(p: Array, harmonics: int) -> tuple[Array, Array, Complex]:
     """:func:`_moments` in NumPy, vectorised over the curves: the reference the kernel is tested
     against, and the path without numba."""
     theta, mu, tau = _arcs(p, np.roll(p, -1, axis=1))
@@ -255,7 +257,9 @@ def _moments_reference(p: Array, harmonics: int) -> tuple[Array, Array, Array]:
     return mean, scatter, coeffs
 
 
-def _moments_kernel(p, harmonics, resonance, mean, scatter, coeffs):
+def _moments_kernel(
+    p: Array, harmonics: int, resonance: float, mean: Array, scatter: Array, coeffs: Array
+) -> None:
     """:func:`_moments_reference`'s formulas one curve at a time (coeffs[c, n, 0 | 1, :] are
     the real and imaginary parts of X_{n+1}), no temporaries beyond one curve."""
     count, m = p.shape[0], p.shape[1]
@@ -369,7 +373,7 @@ def _frames(poles: Array) -> Array:
     return np.stack([e1, np.cross(poles, e1), poles], axis=-2)
 
 
-def _poles(mean: Array, scatter: Array) -> tuple[Array, Array]:
+def _poles(mean: Array, scatter: Array) -> tuple[Array, NDArray[np.intp]]:
     """The three candidate poles (C, 3, 3) — m̂, e, −e — and the canonical one's index (C,)."""
     size = np.linalg.norm(mean, axis=-1)
     ok = np.isfinite(scatter).all(axis=(-2, -1)) & np.isfinite(size)
@@ -384,7 +388,7 @@ def _poles(mean: Array, scatter: Array) -> tuple[Array, Array]:
     return np.where(ok[:, None, None], poles, np.nan), canonical
 
 
-def _pole_variants(frames: Array, mean: Array, coeffs: Array, k: int) -> Array:
+def _pole_variants(frames: Array, mean: Array, coeffs: Complex, k: int) -> Array:
     """The four planar normalisations (…, 4, D) of curves whose coefficients ``mean`` (C, 3)
     and ``coeffs`` (C, K, 3) are written in ``frames`` (C, …, 3, 3) (rows e₁, e₂, e₃)."""
     x = np.einsum("c...ab,cnb->c...na", frames, coeffs)  # (C, …, K, 3)
@@ -527,7 +531,7 @@ class SphereAlignment:
 def _kabsch(h: Array) -> tuple[Array, Array]:
     """max over proper rotations R of tr(R·h) (…,) and the R (…, 3, 3) that reaches it; NaN
     where h is not finite."""
-    ok = np.isfinite(h).all(axis=(-2, -1))
+    ok = np.asarray(np.isfinite(h).all(axis=(-2, -1)))
     u, sigma, vt = np.linalg.svd(np.where(ok[..., None, None], h, 0.0))
     # R = V·diag(1, 1, d)·Uᵀ with d = det(V·Uᵀ) = ±1: the best proper rotation (Kabsch).
     d = np.where(np.linalg.det(u) * np.linalg.det(vt) < 0, -1.0, 1.0)
@@ -589,7 +593,7 @@ def sphere_align(curve: ArrayLike, target: ArrayLike, *, samples: int = 256) -> 
         whole_h = np.moveaxis(whole_h, -1, -2).reshape(whole_h.shape[:-2] + (samples, 3, 3))
         whole = np.argmax(_kabsch(whole_h)[0], axis=-1).astype(float)
 
-        def evaluate(s: Array, spectrum: Array = spectrum) -> tuple[Array, Array]:
+        def evaluate(s: Array, spectrum: Complex = spectrum) -> tuple[Array, Array]:
             h, dh = circular_correlation(spectrum, s)
             value, r = _kabsch(h.real.reshape(h.shape[:-1] + (3, 3)))
             return value, np.einsum("...ij,...ji->...", r, dh.real.reshape(r.shape))
@@ -604,9 +608,8 @@ def sphere_align(curve: ArrayLike, target: ArrayLike, *, samples: int = 256) -> 
     shift = start_fraction(s_f, s_b, backwards, samples)
     # Σ|a|² + Σ|b|² − 2 tr(R H) cancels to √ε on a near-perfect fit: the turned curve's chord
     # distance to the target is summed instead.
-    x = shifted_samples(
-        np.where(backwards[..., None, None], reversed_a, a), np.where(backwards, s_b, s_f), axis=-2
-    )
+    chosen: Array = np.where(backwards[..., None, None], reversed_a, a)
+    x = shifted_samples(chosen, np.where(backwards, s_b, s_f), axis=-2)
     residual = np.sum((x @ np.swapaxes(rotation, -1, -2) - b) ** 2, axis=(-2, -1))
     spread = np.sqrt(np.clip(2.0 - 2.0 * np.linalg.norm(b.mean(axis=-2), axis=-1), 0.0, None))
     with np.errstate(invalid="ignore", divide="ignore"):

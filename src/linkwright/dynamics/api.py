@@ -8,12 +8,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.dynamics.bodies import structure
-from linkwright.dynamics.model import Loads, MassProps, masses_from
+from linkwright.dynamics.bodies import Structure, structure
+from linkwright.dynamics.model import Loads, MassProps, check_speed, loads_from, masses_from
 from linkwright.dynamics.planar import Forces, body_kinematics, forces_of
 from linkwright.mechanisms.base import Mechanism, solve
 
-__all__ = ["forces", "reduced_inertia"]
+__all__ = ["forces", "forces_setup", "reduced_inertia"]
 
 Array = NDArray[np.float64]
 
@@ -57,6 +57,46 @@ def forces(
     props.update({k: v for k, v in (masses or {}).items() if isinstance(v, MassProps)})
     motion = solve(mechanism, inputs, order=2)
     return forces_of(st, mechanism.params(), motion, props, loads or Loads())
+
+
+def forces_setup(
+    mechanism: Mechanism,
+    mass: Any,
+    loads: Any,
+    *,
+    speed: float | None = None,
+    speed_field: str = "loads.speed",
+) -> tuple[Structure, dict[str, MassProps], Loads]:
+    """A document's bodies, ``[mechanism.mass]`` and ``[loads]``, checked for a forces run.
+
+    ``speed`` (rpm) replaces the document's; ``speed_field`` is how an error names it.
+    Raises :class:`~linkwright.dynamics.UnsupportedPlan` for a plan forces cannot set up and
+    :class:`~linkwright.dynamics.ForcesInputError` naming the field for bad masses or loads.
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import FourBar
+    >>> fb = FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=3.5, rocker=3)
+    >>> st, masses, loads = forces_setup(fb, {"crank": 0.2}, {"speed": 60})
+    >>> st.names, masses["crank"].mass, loads.speed_rpm
+    (('crank', 'coupler', 'rocker'), 0.2, 60.0)
+    >>> forces_setup(fb, {"crank": 0.2}, None)
+    Traceback (most recent call last):
+    ...
+    linkwright.dynamics.model.ForcesInputError: loads.speed: must be given and non-zero (rpm) \
+for inertia forces; set loads.inertia = false for a static analysis
+    """
+    from dataclasses import replace
+
+    st = structure(mechanism.plan)
+    params = mechanism.params()
+    lengths = {b.name: float(np.max(params[b.name])) for b in st.bodies if b.name in params}
+    masses = masses_from(mass or {}, st, lengths)
+    parsed = loads_from(loads, st, mechanism.plan.joints)
+    if speed is not None:
+        parsed = replace(parsed, speed_rpm=float(speed))
+    check_speed(masses, parsed, speed_field)
+    return st, masses, parsed
 
 
 def reduced_inertia(

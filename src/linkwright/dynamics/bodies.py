@@ -1,4 +1,4 @@
-"""The rigid bodies of a planar construction plan, and the joints that connect them.
+"""The rigid bodies of a construction plan, and the joints that connect them.
 
 Forces need bodies, which a plan does not list: it places joints. They are read off the step
 kinds' own :meth:`links` and :meth:`plates` (never per family), merged where two of them share
@@ -19,6 +19,9 @@ joint it hangs from, x axis towards the joint it places, v to the left.
 
 A *joint* is a point two bodies or more share (the frame counts as a body); a point on one body
 only (a coupler point) is a point, where loads may act, not a joint.
+
+On the sphere the same rules read the spherical kinds (crank, dyad, rigid point, triad); a
+body's frame is then its link's two joints' axes (origin, toward).
 """
 
 from __future__ import annotations
@@ -26,7 +29,18 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from linkwright.engine.plan import Crank, DyadRRP, DyadRRR, Fixed, Plan, Rigid, Trammel
+from linkwright.engine.plan import (
+    Crank,
+    DyadRRP,
+    DyadRRR,
+    Fixed,
+    Plan,
+    Rigid,
+    SphereCrank,
+    SphereDyad,
+    SphereRigid,
+    Trammel,
+)
 
 __all__ = ["Body", "Guide", "Structure", "UnsupportedPlan", "structure"]
 
@@ -80,6 +94,9 @@ class Structure:
     driven: int
     driven_ratio: str | float
     geared: tuple[tuple[int, str | float], ...] = ()
+    space: str = "plane"
+    pivot: str = ""
+    """The driven crank's ground pivot (on the sphere its axis carries the driving torque)."""
 
     def body(self, name: str) -> Body:
         for b in self.bodies:
@@ -122,7 +139,7 @@ class _Group:
 
 
 def structure(plan: Plan) -> Structure:
-    """The bodies of a planar plan (see the module's docstring for the rules).
+    """The bodies of a plan, planar or spherical (see the module's docstring for the rules).
 
     Examples
     --------
@@ -131,10 +148,6 @@ def structure(plan: Plan) -> Structure:
     >>> [(b.name, b.joints) for b in s.bodies]
     [('crank', ('A0', 'A')), ('coupler', ('A', 'B')), ('rocker', ('B0', 'B'))]
     """
-    if plan.space != "plane":
-        raise UnsupportedPlan(
-            "forces on the sphere are not implemented yet: only planar linkages have them"
-        )
     ground = {s.name for s in plan.steps if isinstance(s, Fixed)}
     groups: list[_Group] = []
     for step in plan.steps:
@@ -155,18 +168,20 @@ def structure(plan: Plan) -> Structure:
     cranks = [k for k, g in enumerate(moving) if g.crank is not None]
     if not cranks:
         raise UnsupportedPlan("the plan has no crank: nothing says which link the input drives")
-    first_crank = next(s for s in plan.steps if isinstance(s, Crank))
+    first_crank = next(s for s in plan.steps if isinstance(s, Crank | SphereCrank))
     driven = next(k for k in cranks if first_crank.name in moving[k].points)
     ratio = first_crank.ratio
     geared = tuple(
         (k, crank[1]) for k in cranks if k != driven and (crank := moving[k].crank) is not None
     )
-    return Structure(tuple(bodies), frozenset(ground), driven, ratio, geared)
+    return Structure(
+        tuple(bodies), frozenset(ground), driven, ratio, geared, plan.space, first_crank.pivot
+    )
 
 
 def _groups_of(step: object, ground: set[str]) -> list[_Group]:
     """The bodies (before merging) one step makes."""
-    if isinstance(step, Crank):
+    if isinstance(step, Crank | SphereCrank):
         name = step.length if isinstance(step.length, str) else None
         return [
             _Group(
@@ -176,7 +191,7 @@ def _groups_of(step: object, ground: set[str]) -> list[_Group]:
                 crank=(step.pivot, step.ratio),
             )
         ]
-    if isinstance(step, DyadRRR):
+    if isinstance(step, DyadRRR | SphereDyad):
         return [
             _Group({step.p1, step.name}, _word(step.r1), (step.p1, step.name)),
             _Group({step.p2, step.name}, _word(step.r2), (step.p2, step.name)),
@@ -191,7 +206,7 @@ def _groups_of(step: object, ground: set[str]) -> list[_Group]:
             _Group({step.p1, step.name}, _word(step.r), (step.p1, step.name)),
             _Group({step.name}, guide=Guide(step.line_point, step.line_angle)),
         ]
-    if isinstance(step, Rigid):
+    if isinstance(step, Rigid | SphereRigid):
         return [_Group({step.origin, step.toward, step.name})]
     if isinstance(step, Trammel):
         if step.guide1 not in ground or step.guide2 not in ground:
@@ -204,7 +219,7 @@ def _groups_of(step: object, ground: set[str]) -> list[_Group]:
     if isinstance(step, Fixed):
         return []
     if hasattr(step, "joints") and hasattr(step, "anchors") and hasattr(step, "lengths"):
-        # A planar triad.
+        # A triad, planar or spherical.
         joints, anchors, lengths = step.joints, step.anchors, step.lengths
         out = [
             _Group({a, j}, _word(r), (a, j))

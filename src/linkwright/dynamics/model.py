@@ -18,6 +18,20 @@ metres give newtons and newton-metres)::
     springs = [{ between = ["P", "B0"], stiffness = 100.0, length = 1.0 }]
     dampers = [{ between = ["B", "B0"], coefficient = 3.0 }]
 
+On the sphere (every link turns about the centre O) a link's points are its joints' axes met
+at the sphere of ``radius`` (under ``[loads]``, in the length unit; default 1), gravity and
+point forces are vectors [x, y, z], and a link is written::
+
+    crank = 0.2     # a uniform thin bar along the great-circle arc between its two joints
+    rocker = { mass = 0.4, centre = { x = 0.9, y = 0.1, z = 0.0 },
+               inertia = [[1e-3, 0, 0], [0, 2e-3, 0], [0, 0, 2e-3]] }
+
+``centre`` in the link's frame (x along its first joint's axis, y towards the second joint in
+their plane, z = x × y), ``inertia`` the tensor about the centre in that frame (symmetric, its
+eigenvalues non-negative and each at most the sum of the other two, as every body's are). A
+spherical link with three joints or more needs both. Torques, springs and dampers are planar
+only for now.
+
 A link given a mass alone is a uniform slender bar between the two joints its length spans
 (the coupler A–B, whatever points it also carries), unless it has three joints (a ternary
 link): then it is a uniform triangular plate over those three joints (inertia
@@ -71,8 +85,10 @@ class MassProps:
     about the centre; None for the uniform body's (see the module's docstring)."""
 
     mass: float
-    centre: tuple[float, float] | None = None
+    centre: tuple[float, ...] | None = None
     inertia: float | None = None
+    tensor: tuple[tuple[float, float, float], ...] | None = None
+    """On the sphere: the inertia tensor about the centre, in the link's frame."""
 
 
 @dataclass(frozen=True)
@@ -82,11 +98,13 @@ class Loads:
     speed_rpm: float = 0.0
     acceleration: float = 0.0
     inertia: bool = True
-    gravity: tuple[float, float] = (0.0, 0.0)
-    forces: tuple[tuple[str, tuple[float, float]], ...] = ()
+    gravity: tuple[float, ...] = (0.0, 0.0)
+    forces: tuple[tuple[str, tuple[float, ...]], ...] = ()
     torques: tuple[tuple[str, float], ...] = ()
     springs: tuple[tuple[str, str, float, float], ...] = ()
     dampers: tuple[tuple[str, str, float], ...] = ()
+    radius: float = 1.0
+    """On the sphere: the radius its links run at, in the length unit."""
 
     @property
     def omega(self) -> float:
@@ -114,10 +132,16 @@ def _num(value: Any, path: str, *, positive: bool = False, nonneg: bool = False)
     return x
 
 
-def _vec(value: Any, path: str) -> tuple[float, float]:
-    if not isinstance(value, list | tuple) or len(value) != 2:
-        raise ForcesInputError(path, f"must be a pair [x, y], got {_show(value)}")
-    return (_num(value[0], f"{path}[0]"), _num(value[1], f"{path}[1]"))
+def _vec(value: Any, path: str, dim: int = 2) -> tuple[float, ...]:
+    if not isinstance(value, list | tuple) or len(value) != dim:
+        shape = "a pair [x, y]" if dim == 2 else "a vector [x, y, z]"
+        raise ForcesInputError(path, f"must be {shape}, got {_show(value)}")
+    return tuple(_num(v, f"{path}[{k}]") for k, v in enumerate(value))
+
+
+def _vec3(value: Any, path: str) -> tuple[float, float, float]:
+    x, y, z = _vec(value, path, 3)
+    return (x, y, z)
 
 
 def _table(value: Any, path: str, allowed: tuple[str, ...]) -> Mapping[str, Any]:
@@ -153,6 +177,9 @@ def masses_from(
         if name not in names:
             raise ForcesInputError(path, _unknown("link", str(name), names))
         body = structure.body(name)
+        if structure.space == "sphere":
+            out[name] = _sphere_mass(value, where, len(body.joints))
+            continue
         if not isinstance(value, Mapping):
             out[name] = MassProps(_num(value, where, positive=True))
             continue
@@ -202,6 +229,54 @@ def masses_from(
     return out
 
 
+def _sphere_mass(value: Any, where: str, joints: int) -> MassProps:
+    """A spherical link's mass: alone (a uniform arc bar), or with its centre and tensor."""
+    if not isinstance(value, Mapping):
+        if joints >= 3:
+            raise ForcesInputError(
+                where,
+                f"a spherical link with {joints} joints needs its centre and inertia tensor "
+                "(only a two-joint link is taken as a uniform arc bar)",
+            )
+        return MassProps(_num(value, where, positive=True))
+    spec = _table(value, where, ("mass", "centre", "inertia"))
+    if "mass" not in spec:
+        raise ForcesInputError(f"{where}.mass", "missing required field")
+    mass = _num(spec["mass"], f"{where}.mass", positive=True)
+    if ("centre" in spec) != ("inertia" in spec):
+        missing = "inertia" if "inertia" not in spec else "centre"
+        raise ForcesInputError(
+            f"{where}.{missing}",
+            "missing: give the centre and the inertia tensor together (or neither, for the "
+            "uniform arc bar)",
+        )
+    if "centre" not in spec:
+        return _sphere_mass(mass, where, joints)
+    c = _table(spec["centre"], f"{where}.centre", ("x", "y", "z"))
+    centre = tuple(_num(c.get(k, 0.0), f"{where}.centre.{k}") for k in "xyz")
+    rows = spec["inertia"]
+    path = f"{where}.inertia"
+    if not isinstance(rows, list | tuple) or len(rows) != 3:
+        raise ForcesInputError(
+            path, f"must be a 3 × 3 tensor [[..], [..], [..]], got {_show(rows)}"
+        )
+    tensor = tuple(_vec3(r, f"{path}[{k}]") for k, r in enumerate(rows))
+    t = np.array(tensor)
+    if not np.allclose(t, t.T, rtol=1e-12, atol=1e-12 * float(np.max(np.abs(t)) or 1.0)):
+        raise ForcesInputError(path, "must be symmetric (an inertia tensor is)")
+    low, mid, high = np.linalg.eigvalsh(0.5 * (t + t.T))
+    slack = 1e-12 * max(abs(high), 1e-300)
+    if low < -slack:
+        raise ForcesInputError(path, f"has a negative principal moment ({low:.6g})")
+    if high > low + mid + slack:
+        raise ForcesInputError(
+            path,
+            f"is not a body's: its largest principal moment {high:.6g} exceeds the sum of the "
+            f"other two ({low + mid:.6g})",
+        )
+    return MassProps(mass, centre, tensor=tensor)
+
+
 _LOAD_FIELDS = (
     "speed",
     "acceleration",
@@ -211,7 +286,9 @@ _LOAD_FIELDS = (
     "torques",
     "springs",
     "dampers",
+    "radius",
 )
+_PLANE_ONLY = ("torques", "springs", "dampers")
 
 
 def _entries(value: Any, path: str) -> list[Mapping[str, Any]]:
@@ -240,12 +317,23 @@ def loads_from(
     if table is None:
         return Loads()
     spec = _table(table, path, _LOAD_FIELDS)
+    sphere = structure.space == "sphere"
+    dim = 3 if sphere else 2
+    for key in _PLANE_ONLY if sphere else ("radius",):
+        if key in spec:
+            raise ForcesInputError(
+                f"{path}.{key}",
+                "not on the sphere yet: planar linkages only"
+                if sphere
+                else "is a spherical linkage's (the radius its links run at)",
+            )
+    radius = _num(spec.get("radius", 1.0), f"{path}.radius", positive=True)
     speed = _num(spec.get("speed", 0.0), f"{path}.speed")
     accel = _num(spec.get("acceleration", 0.0), f"{path}.acceleration")
     inertia = spec.get("inertia", True)
     if not isinstance(inertia, bool):
         raise ForcesInputError(f"{path}.inertia", f"must be true or false, got {_show(inertia)}")
-    gravity = _vec(spec["gravity"], f"{path}.gravity") if "gravity" in spec else (0.0, 0.0)
+    gravity = _vec(spec["gravity"], f"{path}.gravity", dim) if "gravity" in spec else (0.0,) * dim
     forces = []
     for k, e in enumerate(_entries(spec.get("forces", []), f"{path}.forces")):
         w = f"{path}.forces[{k}]"
@@ -255,7 +343,7 @@ def loads_from(
             raise ForcesInputError(
                 f"{w}.point", f"{p} is on the frame: a force there moves nothing"
             )
-        forces.append((p, _vec(e.get("value"), f"{w}.value")))
+        forces.append((p, _vec(e.get("value"), f"{w}.value", dim)))
     torques = []
     for k, e in enumerate(_entries(spec.get("torques", []), f"{path}.torques")):
         w = f"{path}.torques[{k}]"
@@ -286,6 +374,7 @@ def loads_from(
         tuple(torques),
         tuple(springs),
         tuple(dampers),
+        radius,
     )
 
 

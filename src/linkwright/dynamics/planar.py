@@ -74,10 +74,13 @@ class Forces:
     input : θ, radians.
     input_torque : the driving torque from Newton–Euler.
     energy_torque : the same from the energy balance (the check).
-    reactions : joint name → force (see the module's sign conventions).
+    reactions : joint name → force (see the module's sign conventions); on the sphere the
+        least-norm bearing forces (see :mod:`linkwright.dynamics.spherical`).
+    moments : on the sphere, joint name → the reaction moment its revolute carries.
     guides : slider block name → (normal force along the guide's left normal, moment).
     gears : geared link name → the torque its gear pair exerts on it.
-    shaking_force, shaking_moment : on the frame (moment about the origin).
+    shaking_force, shaking_moment : on the frame (moment about the origin; on the sphere a
+        vector about the centre).
     kinetic, potential : energies (potential: gravity and springs).
     """
 
@@ -85,6 +88,7 @@ class Forces:
     input_torque: Array
     energy_torque: Array
     reactions: dict[str, Array]
+    moments: dict[str, Array] = field(default_factory=dict)
     guides: dict[str, Array] = field(default_factory=dict)
     gears: dict[str, Array] = field(default_factory=dict)
     shaking_force: Array = field(default_factory=lambda: np.zeros(0))
@@ -185,6 +189,10 @@ def forces_of(
             plan_or_structure  # type: ignore[arg-type]
         )
     )
+    if st.space == "sphere":
+        from linkwright.dynamics.spherical import forces_of_sphere
+
+        return forces_of_sphere(st, params, motion, masses, loads)
     for name in masses:
         if name not in st.names:
             raise ForcesInputError("mass", f"unknown link {name!r} (known: {', '.join(st.names)})")
@@ -276,7 +284,7 @@ def forces_of(
     matrix = np.stack(columns, axis=-1)
     # Finite positions and derivatives (a regular sample) make a finite system.
     ok = motion.regular & np.all(np.isfinite(rhs), axis=-1)
-    solution = _solve(matrix, rhs, ok)
+    solution = solve_samples(matrix, rhs, ok)
 
     reactions: dict[str, Array] = {}
     guides: dict[str, Array] = {}
@@ -354,7 +362,7 @@ def _far_end(t: object, params: Mapping[str, ArrayLike], motion: Motion) -> tupl
     return end, np.broadcast_to(n2, end.shape)
 
 
-def _solve(matrix: Array, rhs: Array, ok: NDArray[np.bool_]) -> Array:
+def solve_samples(matrix: Array, rhs: Array, ok: NDArray[np.bool_]) -> Array:
     """One solve per sample; NaN where the sample is not ``ok`` or its system is singular."""
     n = matrix.shape[-1]
     # In place (the system is the caller's scratch): an identity where the sample is not ok.

@@ -25,27 +25,34 @@ What stays with the evaluator (the compiled plan calls :func:`place_all` and say
 plans of more than :data:`MAX_STEPS` steps (compile time grows with the source), per-sample
 branch overrides and crossings (circuit tracing), and everything when numba (the ``fast``
 extra) is not installed. The evaluator stays the reference.
+
+This module is the public face: the kernel generator lives in
+:mod:`~linkwright.engine.compile_source`, the disk cache and the threads in
+:mod:`~linkwright.engine.compile_cache`.
 """
 
 from __future__ import annotations
 
-import hashlib
-import importlib.util
 import itertools
-import os
-import sys
-import tempfile
-import threading
 from collections.abc import Mapping
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine.compile_steps import HOIST, fragment
+from linkwright.engine.compile_cache import SERIAL_CELLS as SERIAL_CELLS
+from linkwright.engine.compile_cache import cache_dir, load_kernel, run_ranges
+from linkwright.engine.compile_cache import threads as threads
+from linkwright.engine.compile_source import BLOCK as BLOCK
+from linkwright.engine.compile_source import GENERATOR_VERSION as GENERATOR_VERSION
+from linkwright.engine.compile_source import (
+    KernelShape,
+    ScalarProbe,
+    crank_steps,
+    generate,
+    kernel_outputs,
+)
+from linkwright.engine.compile_steps import fragment
 from linkwright.engine.evaluate import (
     Motion,
     batch_shape,
@@ -54,8 +61,7 @@ from linkwright.engine.evaluate import (
     place_all,
 )
 from linkwright.engine.plan import Plan, placed_joints
-from linkwright.engine.plane_steps import Crank, Fixed, Trammel
-from linkwright.engine.sphere_steps import SphereCrank
+from linkwright.engine.plane_steps import Fixed
 from linkwright.engine.state import JointState, Param
 
 __all__ = [
@@ -70,18 +76,19 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-GENERATOR_VERSION = 3
-"""Part of every kernel's hash: bump it when a fragment changes, so old sources are not used."""
 
 MAX_STEPS = 64
 """Longer plans stay with the evaluator: numba's compile time grows faster than the source."""
 
+
 MAX_MODES = 4096
 """At most this many assembly modes (2^dyads) are placed in one pass."""
+
 
 MAX_RATIOS = 64
 """A crank ratio drawn per mechanism from at most this many values gets one row of cosines per
 value (see _trig); more, and one row per mechanism."""
+
 
 MAX_OUTPUT_BYTES = 2**33
 """A configurations() call that would write more than this is refused before any work."""
@@ -94,293 +101,6 @@ def available() -> bool:
     except ImportError:
         return False
     return True
-
-
-def cache_dir() -> Path:
-    """Where generated kernels and numba's machine code for them are kept."""
-    root = os.environ.get("LINKWRIGHT_CACHE")
-    if root:
-        return Path(root) / "kernels"
-    xdg = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(xdg) / "linkwright" / "kernels"
-
-
-# -- the generator ----------------------------------------------------------------------------
-
-
-@dataclass
-class _Shape:
-    """How one call's parameters meet the plan: which are per-mechanism (columns of S), which
-    uniform (entries of U), and how each crank's cosines and sines arrive (see :func:`_trig`)."""
-
-    batched: dict[str, int] = field(default_factory=dict)  # scalar name → column of S
-    uniform: dict[str, int] = field(default_factory=dict)  # scalar name → entry of U
-    # crank step name → (row of its trig array: "0" shared or "i" per mechanism, rotated by
-    # its own phase in the kernel)
-    cranks: dict[str, tuple[str, bool]] = field(default_factory=dict)
-
-
-BLOCK = 64
-"""Samples per block of the sample loop. The block's results go to a scratch array whose row
-stride is this constant, so LLVM can tell its rows apart without a runtime check per pair (with
-a stride known only at run time it gave up: "too many memory checks needed"), and the block
-stays in the first-level cache for the copies to the outputs that follow."""
-
-
-class _Names:
-    """The generator's side of :class:`linkwright.engine.compile_steps.Names`."""
-
-    def __init__(self, plan: Plan, shape: _Shape, order: int, modes: bool) -> None:
-        self.order = order
-        self.dim = 3 if plan.space == "sphere" else 2
-        self.shape = shape
-        self.modes = modes
-        self.index = {j: k for k, j in enumerate(plan.joints)}
-        self.dyads = [s.name for s in plan.dyads]
-        self.cranks = list(shape.cranks)
-        self.hoisted: list[str] = []
-
-    def joint(self, name: str) -> str:
-        return f"j{self.index[name]}_"
-
-    def scalar(self, p: Param) -> str:
-        if not isinstance(p, str):
-            return repr(float(p))
-        if p in self.shape.batched:
-            return f"s{self.shape.batched[p]}"
-        return f"u{self.shape.uniform[p]}"
-
-    def point(self, key: str) -> tuple[str, ...]:
-        return tuple(self.scalar(f"{key}[{c}]") for c in range(self.dim))
-
-    def sign(self, step_name: str, key: str) -> str:
-        if self.modes:
-            return f"g{self.dyads.index(step_name)}"
-        return self.scalar(key)
-
-    def trig(self, step: Any) -> tuple[str, str]:
-        k = self.cranks.index(step.name)
-        row, rotated = self.shape.cranks[step.name]
-        c, s = f"C{k}[0, {row}, j]", f"C{k}[1, {row}, j]"
-        if not rotated:
-            return c, s
-        # cos and sin of ratio·t, turned by the mechanism's own phase (the angle-sum formulas):
-        # one NumPy cos and sin per sample row, not one libm call per mechanism and sample.
-        phase = self.scalar(step.phase)
-        self.hoisted += [f"q{k}c = math.cos({phase})", f"q{k}s = math.sin({phase})"]
-        return f"(q{k}c * {c} - q{k}s * {s})", f"(q{k}s * {c} + q{k}c * {s})"
-
-
-def _crank_steps(plan: Plan) -> list[Any]:
-    """The steps turned by the input, whose cosines and sines the caller computes."""
-    return [s for s in plan.steps if isinstance(s, Crank | SphereCrank | Trammel)]
-
-
-def _outputs(plan: Plan, order: int, modes: bool, joints: tuple[str, ...] | None) -> list[str]:
-    """The output arguments of a kernel, in order: ``joints`` None for every joint's state
-    (positions, derivatives up to ``order``, valid and regular masks, dyad margins), else the
-    masked positions of those joints only."""
-    moving = [j for j in plan.joints if not isinstance(plan.step(j), Fixed)]
-    if joints is not None:
-        return [f"P{k}" for k in range(len(joints))]
-    names: list[str] = []
-    for k in range(len(moving)):
-        names.append(f"P{k}")
-        if order >= 1:
-            names.append(f"V{k}")
-        if order >= 2:
-            names.append(f"A{k}")
-        names += [f"OK{k}", f"RG{k}"]
-    names += [f"M{k}" for k in range(len(plan.dyads))]
-    return names
-
-
-def generate(
-    plan: Plan,
-    shape: _Shape,
-    order: int,
-    modes: bool,
-    joints: tuple[str, ...] | None = None,
-) -> str:
-    """The source of the kernel of ``plan`` for one shape of its parameters (see module doc).
-
-    The kernel's arguments: lo, hi (the mechanisms it places), ns (samples per mechanism),
-    S (n, columns) per-mechanism scalars, U (entries,) uniform ones, one array
-    (2, 1 or n, samples) of cosines and sines per crank, then the outputs (:func:`_outputs`):
-    per moving joint P, V, A (modes, n, samples, dim), OK, RG (modes, n, samples), per dyad M
-    (modes, n, samples); or, with ``joints``, P (n, samples, dim) per joint named, NaN wherever
-    any joint of the mechanism is not placed (as a Motion masks them).
-    """
-    g = _Names(plan, shape, order, modes)
-    moving = [j for j in plan.joints if not isinstance(plan.step(j), Fixed)]
-    comps = "xyz"[: g.dim]
-    body: list[str] = []
-    for step in plan.steps:
-        emit = fragment(step)
-        assert emit is not None  # compiled_plan checked every step
-        for line in emit(step, g):
-            if line.startswith(HOIST):
-                g.hoisted.append(line[len(HOIST) :])
-            else:
-                body.append(line)
-    # The block's results go to scratch rows first (unit stride, see BLOCK); one copy loop per
-    # output array follows, each with one pair of arrays for LLVM to check for overlap.
-    fill: list[str] = []
-    copies: list[list[str]] = []
-    r = 0
-    m = "m, " if modes else "0, "
-    if joints is not None:
-        oks = " & ".join(f"{g.joint(name)}ok" for name in moving) or "True"
-        body.append(f"bad = 0.0 if {oks} else nan")
-        for k, name in enumerate(joints):
-            v = g.joint(name)
-            copy = []
-            for c, comp in enumerate(comps):
-                fill.append(f"R[{r}, jj] = {v}{comp} + bad")
-                copy.append(f"P{k}[i, j0 + jj, {c}] = R[{r}, jj]")
-                r += 1
-            copies.append(copy)
-    else:
-        for k, name in enumerate(moving):
-            v = g.joint(name)
-            for kind, least, out in (("", 0, "P"), ("v", 1, "V"), ("a", 2, "A")):
-                if order >= least:
-                    copy = []
-                    for c, comp in enumerate(comps):
-                        fill.append(f"R[{r}, jj] = {v}{kind}{comp}")
-                        copy.append(f"{out}{k}[{m}i, j0 + jj, {c}] = R[{r}, jj]")
-                        r += 1
-                    copies.append(copy)
-            for flag, out in (("ok", "OK"), ("rg", "RG")):
-                fill.append(f"R[{r}, jj] = 1.0 if {v}{flag} else 0.0")
-                copies.append([f"{out}{k}[{m}i, j0 + jj] = R[{r}, jj] != 0.0"])
-                r += 1
-        for k, name in enumerate(g.dyads):
-            fill.append(f"R[{r}, jj] = {g.joint(name)}mg")
-            copies.append([f"M{k}[{m}i, j0 + jj] = R[{r}, jj]"])
-            r += 1
-    trig_args = [f"C{k}" for k in range(len(g.cranks))]
-    outputs = _outputs(plan, order, modes, joints)
-    args = ", ".join(["lo", "hi", "ns", "S", "U", *trig_args, *outputs])
-    out_lines = [
-        f"# generated by linkwright.engine.compile (generator {GENERATOR_VERSION}): do not edit",
-        "import math",
-        "",
-        "import numba",
-        "import numpy as np",
-        "",
-        "",
-        # A serial function over a range of mechanisms, released from the GIL: the caller
-        # runs ranges on threads. numba's own parallel loop would compile the whole body a
-        # second time with its parallel passes (three times the compile time in all).
-        '@numba.njit(cache=True, error_model="numpy", nogil=True, boundscheck=False)',
-        f"def kernel({args}):",
-        "    nan = np.nan",
-        f"    R = np.empty(({max(r, 1)}, {BLOCK}))",
-        "    for i in range(lo, hi):",
-    ]
-    out_lines += [f"        s{c} = S[i, {c}]" for c in shape.batched.values()]
-    out_lines += [f"        u{c} = U[{c}]" for c in shape.uniform.values()]
-    out_lines += ["        " + line for line in g.hoisted]
-    pad = "        "
-    if modes:
-        count = 2 ** len(g.dyads)
-        last = len(g.dyads) - 1
-        out_lines.append(f"        for m in range({count}):")
-        # itertools.product's order over (1, −1) per dyad, as continuation.every_configuration.
-        out_lines += [
-            f"            g{k} = 1.0 - 2.0 * ((m >> {last - k}) & 1)" for k in range(len(g.dyads))
-        ]
-        pad = "            "
-    out_lines += [
-        pad + f"for j0 in range(0, ns, {BLOCK}):",
-        pad + f"    nb = min({BLOCK}, ns - j0)",
-        pad + "    for jj in range(nb):",
-        pad + "        j = j0 + jj",
-    ]
-    out_lines += [pad + "        " + line for line in body + fill]
-    for copy in copies:
-        out_lines.append(pad + "    for jj in range(nb):")
-        out_lines += [pad + "        " + line for line in copy]
-    return "\n".join(out_lines) + "\n"
-
-
-# -- the cache --------------------------------------------------------------------------------
-
-_LOCK = threading.Lock()
-_LOADED: dict[str, Any] = {}
-
-
-def _write(directory: Path, name: str, source: str) -> Path:
-    """The source at ``directory/name``, written atomically (processes race for it)."""
-    directory.mkdir(parents=True, exist_ok=True)
-    path = directory / name
-    if path.exists() and path.read_text() == source:
-        return path
-    fd, tmp = tempfile.mkstemp(dir=directory, suffix=".tmp")
-    with os.fdopen(fd, "w") as f:
-        f.write(source)
-    os.replace(tmp, path)
-    return path
-
-
-def load_kernel(source: str) -> Any:
-    """The compiled ``kernel`` of a generated source, from the disk cache where it is there."""
-    digest = hashlib.sha256(source.encode()).hexdigest()[:24]
-    with _LOCK:
-        if digest in _LOADED:
-            return _LOADED[digest]
-        name = f"lw_{digest}.py"
-        try:
-            path = _write(cache_dir(), name, source)
-        except OSError:
-            # An unwritable cache: compile anyway, from a private directory (no reuse).
-            path = _write(Path(tempfile.mkdtemp(prefix="linkwright-kernels-")), name, source)
-        module_name = f"linkwright_kernels.lw_{digest}"
-        spec = importlib.util.spec_from_file_location(module_name, path)
-        assert spec is not None and spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        sys.modules[module_name] = module
-        spec.loader.exec_module(module)
-        _LOADED[digest] = module.kernel
-        return module.kernel
-
-
-# Below this many mechanism-samples a batch runs on the calling thread: handing ranges to
-# threads costs tens of microseconds, what about 10^4 samples of a six-bar take.
-SERIAL_CELLS = 2**14
-
-_POOL: ThreadPoolExecutor | None = None
-
-
-def threads() -> int:
-    """The threads a large batch runs on: ``NUMBA_NUM_THREADS`` where set, else the cores."""
-    value = os.environ.get("NUMBA_NUM_THREADS")
-    return max(1, int(value)) if value and value.isdigit() else (os.cpu_count() or 1)
-
-
-def _run_ranges(kernel: Any, n: int, per_mechanism: int, args: tuple[Any, ...]) -> None:
-    """``kernel(lo, hi, *args)`` over [0, n), split into ranges run on threads when large."""
-    global _POOL
-    workers = min(threads(), n)
-    if workers <= 1 or n * per_mechanism < SERIAL_CELLS:
-        kernel(0, n, *args)
-        return
-    if _POOL is None or _POOL._max_workers < workers:  # type: ignore[attr-defined]
-        _POOL = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="linkwright-kernel")
-    # A few ranges per thread even out threads slowed by other work on the machine.
-    parts = min(n, 4 * workers)
-    bounds = np.linspace(0, n, parts + 1).astype(int)
-    futures = [
-        _POOL.submit(kernel, int(lo), int(hi), *args)
-        for lo, hi in itertools.pairwise(bounds)
-        if hi > lo
-    ]
-    for f in futures:
-        f.result()
-
-
-# -- the public face --------------------------------------------------------------------------
 
 
 def _fallback_reason(plan: Plan) -> str | None:
@@ -422,7 +142,7 @@ class CompiledPlan:
     def _scalars(self) -> list[str]:
         """Every named scalar the steps read, points split into components (``key[c]``)."""
         names: list[str] = []
-        probe = _Probe(self.dim)
+        probe = ScalarProbe(self.dim)
         for step in self.plan.steps:
             emit = fragment(step)
             assert emit is not None
@@ -434,14 +154,14 @@ class CompiledPlan:
 
     def _prepare(
         self, params: Mapping[str, ArrayLike], theta: ArrayLike, points: frozenset[str]
-    ) -> tuple[_Shape, Array, Array, list[Array], int, tuple[int, ...]]:
+    ) -> tuple[KernelShape, Array, Array, list[Array], int, tuple[int, ...]]:
         theta = np.asarray(theta, dtype=float)
         if theta.ndim == 0:
             theta = theta[None]
         full = np.broadcast_shapes(batch_shape(params, points) + (1,), theta.shape)
         lead, samples = full[:-1], full[-1]
         n = int(np.prod(lead, dtype=np.int64))
-        shape = _Shape()
+        shape = KernelShape()
         batched: list[Array] = []
         uniform: list[float] = []
         for name in self._scalars():
@@ -456,7 +176,7 @@ class CompiledPlan:
                 shape.batched[name] = len(batched)
                 batched.append(np.broadcast_to(value, lead).reshape(n))
         T = theta.reshape(1, samples) if theta.size == samples else np.broadcast_to(theta, full)
-        trig = [_trig(step, params, shape, T, lead, n, batched) for step in _crank_steps(self.plan)]
+        trig = [_trig(step, params, shape, T, lead, n, batched) for step in crank_steps(self.plan)]
         S = np.stack(batched, axis=-1) if batched else np.zeros((n, 0))
         U = np.array(uniform, dtype=float)
         return shape, S, U, trig, n, full
@@ -472,7 +192,7 @@ class CompiledPlan:
         into: list[Array] | None = None,
     ) -> tuple[Array, list[Array], tuple[int, ...]]:
         """The kernel run over the batch: the broadcast inputs, the output arrays in the
-        kernel's order (:func:`_outputs`) and the batch's full shape."""
+        kernel's order (:func:`kernel_outputs`) and the batch's full shape."""
         count = 2 ** len(self.dyads) if modes else 1
         if modes and count > MAX_MODES:
             raise ValueError(
@@ -490,7 +210,7 @@ class CompiledPlan:
             need = cells * (J * (2 + 8 * d * (1 + min(order, 2))) + 8 * K)
         else:
             need = cells * 8 * d * len(joints)
-        need += 16 * n * samples * len(_crank_steps(self.plan))  # at most, the cranks' trig
+        need += 16 * n * samples * len(crank_steps(self.plan))  # at most, the cranks' trig
         if need > MAX_OUTPUT_BYTES:
             raise ValueError(
                 f"the result would take {need / 2**30:.1f} GiB (more than "
@@ -503,7 +223,7 @@ class CompiledPlan:
         # afresh (and its pages faulted in) at every call.
         outs: list[Array] = []
         lead = (count, n, samples) if joints is None else (n, samples)
-        for name in _outputs(self.plan, order, modes, joints) if into is None else ():
+        for name in kernel_outputs(self.plan, order, modes, joints) if into is None else ():
             if name.startswith(("OK", "RG")):
                 outs.append(np.empty(lead, dtype=bool))
             elif name.startswith("M"):
@@ -512,7 +232,7 @@ class CompiledPlan:
                 outs.append(np.empty((*lead, d)))
         if into is not None:
             outs = [a.reshape(*lead, d) for a in into]  # views: checked by the caller
-        _run_ranges(kernel, n, samples * count, (samples, S, U, *trig, *outs))
+        run_ranges(kernel, n, samples * count, (samples, S, U, *trig, *outs))
         return np.broadcast_to(theta_a, full), outs, full
 
     def _states(
@@ -526,7 +246,9 @@ class CompiledPlan:
     ) -> dict[str, JointState]:
         """Every joint's state, for one mode of the kernel's outputs (None: the only one)."""
         m = 0 if mode is None else mode
-        named = dict(zip(_outputs(self.plan, order, mode is not None, None), outs, strict=True))
+        named = dict(
+            zip(kernel_outputs(self.plan, order, mode is not None, None), outs, strict=True)
+        )
         states: dict[str, JointState] = {}
         moving = {name: k for k, name in enumerate(self.moving)}
         dyads = {name: k for k, name in enumerate(self.dyads)}
@@ -549,6 +271,7 @@ class CompiledPlan:
                     regular=named[f"RG{k}"][m].reshape(full),
                 )
                 if name in dyads:
+                    sign: Array | np.float64
                     if mode is None:
                         sign = np.asarray(params[step.branch], dtype=float)[..., None]  # type: ignore[attr-defined]
                     else:
@@ -686,39 +409,10 @@ class CompiledPlan:
         return combos, _stack_motions(motions)
 
 
-class _Probe:
-    """A Names that records the scalars a plan's fragments read."""
-
-    order = 2
-
-    def __init__(self, dim: int) -> None:
-        self.dim = dim
-        self.used: list[str] = []
-
-    def joint(self, name: str) -> str:
-        return "j_"
-
-    def scalar(self, p: Param) -> str:
-        if isinstance(p, str):
-            self.used.append(p)
-        return "0.0"
-
-    def point(self, key: str) -> tuple[str, ...]:
-        return tuple(self.scalar(f"{key}[{c}]") for c in range(self.dim))
-
-    def sign(self, step_name: str, key: str) -> str:
-        return self.scalar(key)
-
-    def trig(self, step: Any) -> tuple[str, str]:
-        # The phase is read in the kernel where it is turned per mechanism (see _trig).
-        self.scalar(step.phase)
-        return "0.0", "0.0"
-
-
 def _trig(
     step: Any,
     params: Mapping[str, ArrayLike],
-    shape: _Shape,
+    shape: KernelShape,
     T: Array,
     lead: tuple[int, ...],
     n: int,

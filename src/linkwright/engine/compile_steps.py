@@ -118,7 +118,9 @@ def _crank(step: Crank, g: Names) -> list[str]:
     return lines
 
 
-def _solve2(v: str, r1: tuple[str, str], r2: tuple[str, str], b1: str, b2: str, out: str):
+def _solve2(
+    v: str, r1: tuple[str, str], r2: tuple[str, str], b1: str, b2: str, out: str
+) -> list[str]:
     """Cramer's rule as plane.solve_2x2_rows: rows r1, r2, right-hand sides b1, b2. One
     division per joint (``{v}it``, see :func:`_inverse2`), shared by both solves: a packed
     division costs several multiplications."""

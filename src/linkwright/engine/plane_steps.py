@@ -330,7 +330,10 @@ class Rigid(OnLink):
         cu, cv = (u * inv_len)[..., None], (v * inv_len)[..., None]
 
         def local(vec: Array) -> Array:
-            return cu * vec + cv * plane.perp(vec)
+            # Where the link's joints met (no frame: inv_len is inf) the sample is masked
+            # below; its products are NaN by design, not a warning.
+            with np.errstate(invalid="ignore"):
+                return cu * vec + cv * plane.perp(vec)
 
         valid, regular = combine(jo, jt)
         valid = valid & np.isfinite(inv_len)

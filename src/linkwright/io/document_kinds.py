@@ -528,7 +528,7 @@ def _default_toward(crank: dict[str, Any], before: list[dict[str, Any]], path: s
     (the same rule as :class:`~linkwright.mechanisms.linkage.SphereCrankJoint`'s)."""
     for j in before:
         if j["type"] == "fixed" and j["name"] != crank["pivot"]:
-            return j["name"]
+            return str(j["name"])
     raise DocumentError(
         path,
         "missing, and no fixed joint other than the pivot is listed before this crank to "

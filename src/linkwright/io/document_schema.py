@@ -261,6 +261,17 @@ JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
         FieldSpec("u", "number", default=0.0),
         FieldSpec("v", "number", default=0.0),
     ),
+    # The input at a moving hinge (HingeJoint): places the hinge (name) and its far joint.
+    "hinge": (
+        FieldSpec("far", "joint"),
+        FieldSpec("z", "joint"),
+        FieldSpec("r", "length"),
+        FieldSpec("y", "joint"),
+        FieldSpec("a", "length"),
+        FieldSpec("b", "length"),
+        FieldSpec("phase", "angle_deg", default=0.0),
+        FieldSpec("assembly", "sign", default=1),
+    ),
 }
 """A planar ``linkage`` joint's fields by its ``type`` (besides ``name`` and ``type``), in
 document order; the names are those of the joint spec classes of

@@ -203,7 +203,7 @@ __all__ = [
 
 def _mechanism_class(family: str) -> type[Mechanism]:
     try:
-        return registry.family(family).cls  # type: ignore[no-any-return]
+        return registry.family(family).cls
     except LookupError:
         raise DocumentError(
             "mechanism.family", f"family {family!r} is not available in this version"
@@ -228,6 +228,35 @@ class Document:
 
     Two documents are equal when their validated mappings are: the mechanism is derived from
     ``raw``, and its array fields do not compare to a single truth value.
+
+    Examples
+    --------
+    A document is made by :func:`parse_document` (or read by :func:`load_document`); it holds
+    the mechanism, ready for every verb, and the mapping with every default filled in:
+
+    >>> doc = parse_document({"format": "linkwright/1", "mechanism": {
+    ...     "family": "fourbar", "A0": [0, 0], "B0": [4, 0],
+    ...     "crank": 1, "coupler": 3, "rocker": 3.5}})
+    >>> doc.family, type(doc.mechanism).__name__, doc.raw["mechanism"]["assembly"]
+    ('fourbar', 'FourBar', 1)
+    >>> doc == parse_document(doc.raw)
+    True
+
+    A linkage that cannot assemble is still a valid document (the verbs say where it fails);
+    a field that is not a linkage's is refused, naming the field:
+
+    >>> far = parse_document({"format": "linkwright/1", "mechanism": {
+    ...     "family": "fourbar", "A0": [0, 0], "B0": [9, 0],
+    ...     "crank": 1, "coupler": 1, "rocker": 1}})
+    >>> from linkwright import input_range
+    >>> bool(input_range(far.mechanism).never)
+    True
+    >>> parse_document({"format": "linkwright/1", "mechanism": {
+    ...     "family": "fourbar", "A0": [0, 0], "B0": [4, 0],
+    ...     "crank": -1, "coupler": 3, "rocker": 3.5}})
+    Traceback (most recent call last):
+    ...
+    linkwright.io.documents.DocumentError: mechanism.crank: must be a positive number, got -1
     """
 
     title: str | None

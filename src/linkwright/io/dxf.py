@@ -9,6 +9,7 @@ from __future__ import annotations
 import os
 import pathlib
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from linkwright.io.export_geometry import (
     write_atomically,
 )
 from linkwright.mechanisms import Mechanism
+
+if TYPE_CHECKING:  # ezdxf is imported where a file is written
+    from ezdxf.layouts.layout import Modelspace
 
 __all__ = ["export_dxf"]
 
@@ -78,12 +82,13 @@ def export_dxf(
     ...                            for e in doc.modelspace().query("LINE[layer=='LINKS']")]
     (4, [('LINE', 1.0), ('LINE', 3.5)])
     """
-    import ezdxf
+    # ezdxf.new itself is not an explicit export of the package (mypy's reading of py.typed).
+    from ezdxf.filemanagement import new
 
     path, _ = target_path(out, "dxf")
     unit = length_unit(units, plan_of(mechanism).space)
     drawing = build_drawing(mechanism, at, samples)
-    doc = ezdxf.new("R2010", units=INSUNITS[unit])
+    doc = new("R2010", units=INSUNITS[unit])
     doc.header["$MEASUREMENT"] = 0 if unit in ("in", "ft") else 1
     if title:
         doc.header.custom_vars.append("TITLE", title.replace("\n", " "))
@@ -96,6 +101,7 @@ def export_dxf(
             doc.layers.add(curve_layers[joint], color=DXF_CURVE_COLOURS[i % 5])
     msp = doc.modelspace()
     if drawing.space == "sphere":
+        assert drawing.centre is not None  # build_drawing gives a spherical drawing its centre
         _dxf_sphere(msp, drawing, curve_layers)
         # Open looking at the linkage from outside the sphere, along the picture's centre.
         view = doc.set_modelspace_vport(2.5, center=(0.0, 0.0))
@@ -116,7 +122,7 @@ def export_dxf(
     return write_atomically(path, write)
 
 
-def _dxf_plane(msp, d: Drawing, curve_layers: Mapping[str, str]) -> None:
+def _dxf_plane(msp: Modelspace, d: Drawing, curve_layers: Mapping[str, str]) -> None:
     r = d.radius
     p = {j: tuple(map(float, v)) for j, v in d.pose.items()}
     for a, b in d.binary:
@@ -147,7 +153,7 @@ def _dxf_plane(msp, d: Drawing, curve_layers: Mapping[str, str]) -> None:
             )
 
 
-def _dxf_sphere(msp, d: Drawing, curve_layers: Mapping[str, str]) -> None:
+def _dxf_sphere(msp: Modelspace, d: Drawing, curve_layers: Mapping[str, str]) -> None:
     from ezdxf.math import OCS
 
     r = d.radius

@@ -35,7 +35,7 @@ from linkwright.engine import (
     SphereRigid,
     Trammel,
 )
-from linkwright.engine.plan import placed_joints
+from linkwright.engine.plan import Plan, placed_joints
 from linkwright.files import atomic_path
 from linkwright.geometry.sphere import lambert_azimuthal, map_frame
 from linkwright.mechanisms import Mechanism, circuit, circuits, solve
@@ -274,7 +274,7 @@ def _value(params: Mapping[str, ArrayLike], p: str | float) -> float:
     return float(np.asarray(params[p] if isinstance(p, str) else p, dtype=float))
 
 
-def plan_of(mechanism: Mechanism):
+def plan_of(mechanism: Mechanism) -> Plan:
     try:
         return mechanism.plan
     except ValueError as exc:  # NoConstructionPlan: a six-bar driven at its output
@@ -315,7 +315,7 @@ def checked_samples(samples: object) -> int:
     if (
         isinstance(samples, bool)
         or not isinstance(samples, numbers.Integral)
-        or not 3 <= samples <= MAX_SAMPLES
+        or not 3 <= int(samples) <= MAX_SAMPLES
     ):
         raise ExportError(f"samples: must be an integer from 3 to {MAX_SAMPLES}, got {samples!r}")
     return int(samples)
@@ -338,9 +338,9 @@ def circuit_paths(mechanism: Mechanism, samples: object) -> CircuitPaths:
             motion = circuit(mechanism, n, order=0)
     except ValueError as exc:  # e.g. a gear ratio that never repeats: no closed circuit
         raise ExportError(f"cannot trace the circuit: {exc}") from None
-    valid = np.asarray(motion.valid, dtype=bool) if motion is not None else np.zeros(1, bool)
-    if not valid.any():
+    if motion is None or not np.asarray(motion.valid, dtype=bool).any():
         raise ExportError("the linkage cannot be assembled at any input (with its assembly)")
+    valid = np.asarray(motion.valid, dtype=bool)
     return CircuitPaths(
         index=np.flatnonzero(valid),
         theta=np.asarray(motion.input, dtype=float)[valid],
@@ -597,7 +597,8 @@ def _guides(
 
 def unit_rows(v: Array) -> Array:
     with np.errstate(invalid="ignore", divide="ignore"):
-        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+        unit: Array = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return unit
 
 
 def slerp(a: Array, b: Array, step: float = math.radians(2.0)) -> Array:

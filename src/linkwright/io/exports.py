@@ -12,7 +12,11 @@ The drawings show the linkage at one pose and the closed paths of the traced joi
   joints are unit vectors) for *every* joint of the plan in plan order, ground joints included
   (constant columns, kept so that every row is a whole pose). Numbers are written by
   :func:`number_text`: full double precision. Plain CSV without a comment line, for
-  ``numpy.loadtxt(path, delimiter=",", skiprows=1)`` and spreadsheets.
+  ``numpy.loadtxt(path, delimiter=",", skiprows=1)`` and spreadsheets. Given ``forces`` (a
+  document's masses and loads, :func:`linkwright.dynamics.forces_setup`), the rows go on with
+  the forces at each sample (:func:`forces_columns`): ``input_torque``, every reaction
+  ``<joint>_Fx``, ``_Fy`` (``_Fz``; on the sphere also ``_Mx``, ``_My``, ``_Mz``, its moment),
+  the shaking force ``shaking_Fx`` … and moment, in the document's units.
 * **SVG** (:func:`export_svg`): plain SVG 1.1 text, in groups ``<g id="ground">`` (pivots as
   triangles, fixed slider guides dashed), ``"links"`` (binary links as lines, links of three
   or more joints as closed polygons, slider blocks, guides carried by a link), ``"curves"``,
@@ -54,6 +58,8 @@ import math
 import numbers
 import os
 import pathlib
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -88,6 +94,7 @@ __all__ = [
     "export_csv",
     "export_dxf",
     "export_svg",
+    "forces_columns",
     "joint_paths",
     "number_text",
     "topology",
@@ -102,7 +109,11 @@ Array = NDArray[np.float64]
 
 
 def export_csv(
-    mechanism: Mechanism, out: str | os.PathLike[str], *, samples: int = 360
+    mechanism: Mechanism,
+    out: str | os.PathLike[str],
+    *,
+    samples: int = 360,
+    forces: ForcesSetup | None = None,
 ) -> pathlib.Path:
     """Write every joint's path along the circuit as CSV (see the module notes for columns).
 
@@ -114,6 +125,8 @@ def export_csv(
         Destination ending in ``.csv``; missing parent folders are created.
     samples : int
         Rows (samples along the circuit, 3 to 1,000,000).
+    forces : (structure, masses, loads), optional
+        As :func:`linkwright.dynamics.forces_setup` returns them: the forces' columns follow.
 
     Returns
     -------
@@ -140,15 +153,61 @@ def export_csv(
            [270.      ,   2.660379,   3.233484]])
     """
     path, _ = target_path(out, "csv")
-    return _write_csv(circuit_paths(mechanism, samples), path)
+    paths = circuit_paths(mechanism, samples)
+    extra = forces_columns(mechanism, paths, forces) if forces is not None else {}
+    return _write_csv(paths, path, extra)
 
 
-def _write_csv(paths: CircuitPaths, path: pathlib.Path) -> pathlib.Path:
+ForcesSetup = tuple[Any, Mapping[str, Any], Any]
+"""A document's (structure, masses, loads) for forces: :func:`linkwright.dynamics.forces_setup`."""
+
+
+def forces_columns(
+    mechanism: Mechanism, paths: CircuitPaths, forces: ForcesSetup
+) -> dict[str, Array]:
+    """The forces at the circuit's samples, as named CSV columns (see the module notes)."""
+    from linkwright.dynamics import forces_of
+    from linkwright.mechanisms import circuit, circuits
+
+    st, masses, loads = forces
+    if mechanism.plan.triads:
+        motion = circuits(mechanism, paths.samples, order=2)[1][0]
+    else:
+        motion = circuit(mechanism, paths.samples, order=2)
+    f = forces_of(st, mechanism.params(), motion, masses, loads)
+    rows = paths.index
+    out: dict[str, Array] = {"input_torque": f.input_torque[rows]}
+    for table, letter in ((f.reactions, "F"), (f.moments, "M")):
+        for name, vectors in table.items():
+            for k, axis in enumerate("xyz"[: vectors.shape[-1]]):
+                out[f"{name}_{letter}{axis}"] = vectors[rows, k]
+    shaking = f.shaking_force[rows]
+    for k, axis in enumerate("xyz"[: shaking.shape[-1]]):
+        out[f"shaking_F{axis}"] = shaking[:, k]
+    moment = f.shaking_moment[rows]
+    if moment.ndim == 1:
+        out["shaking_M"] = moment
+    else:
+        for k, axis in enumerate("xyz"):
+            out[f"shaking_M{axis}"] = moment[:, k]
+    return out
+
+
+def _write_csv(
+    paths: CircuitPaths, path: pathlib.Path, extra: Mapping[str, Array] | None = None
+) -> pathlib.Path:
     axes = ("x", "y", "z")[: next(iter(paths.positions.values())).shape[-1]]
     header = ["sample", "theta_deg", "theta_rad"]
     header += [f"{joint}_{a}" for joint in paths.positions for a in axes]
+    extra = extra or {}
+    header += list(extra)
     table = np.concatenate(
-        [np.degrees(paths.theta)[:, None], paths.theta[:, None], *paths.positions.values()],
+        [
+            np.degrees(paths.theta)[:, None],
+            paths.theta[:, None],
+            *paths.positions.values(),
+            *(np.asarray(v, dtype=float)[:, None] for v in extra.values()),
+        ],
         axis=1,
     )
 
@@ -206,6 +265,7 @@ def export(
     samples: int = 360,
     units: str | None = None,
     title: str | None = None,
+    forces: ForcesSetup | None = None,
 ) -> pathlib.Path:
     """Export ``mechanism`` to ``out``, in the format its suffix names (.csv, .svg or .dxf).
 
@@ -226,6 +286,8 @@ def export(
         accepted), or None for unitless.
     title : str, optional
         The drawing's title.
+    forces : (structure, masses, loads), optional
+        The CSV carries the forces at each sample too (see :func:`export_csv`).
 
     Returns
     -------
@@ -256,6 +318,7 @@ def export(
     if fmt == "csv":
         paths = circuit_paths(mechanism, samples)
         pose_at(mechanism, paths, at)  # a pose asked for must exist, even if the CSV has them all
-        return _write_csv(paths, path)
+        extra = forces_columns(mechanism, paths, forces) if forces is not None else {}
+        return _write_csv(paths, path, extra)
     writer = export_svg if fmt == "svg" else export_dxf
     return writer(mechanism, path, at=at, samples=samples, units=units, title=title)

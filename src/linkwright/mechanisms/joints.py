@@ -13,6 +13,10 @@ DyadJoint       ``rrr``       the pin of two binary links: circle(p1, r1) ∩ ci
 SliderJoint     ``rrp``       a slider pin: circle(p1, r) ∩ the line through joint
                               ``line_point`` at ``line_angle`` (a guide of fixed direction)
 RigidJoint      ``rigid``     a point fixed on the link ``origin``→``toward`` at local (u, v)
+HingeJoint      ``hinge``     the linkage driven at a moving hinge: the joint ``name`` (H) and
+                              the joint ``far`` (X), with |X z| = ``r``, |H X| = ``a``,
+                              |H y| = ``b`` and the angle at H from H→y to H→X equal to
+                              ``phase + θ`` (in place of a crank)
 ==============  ============  ====================================================================
 
 On the sphere (``space = "sphere"``) every joint is a revolute whose axis passes through the
@@ -68,6 +72,7 @@ __all__ = [
     "CrankJoint",
     "DyadJoint",
     "FixedJoint",
+    "HingeJoint",
     "InvalidLinkage",
     "Joint",
     "RigidJoint",
@@ -75,6 +80,7 @@ __all__ = [
     "SphereCrankJoint",
     "SphereRigidJoint",
     "numeric_kinds",
+    "placed_by",
     "unit_axis",
 ]
 
@@ -243,6 +249,51 @@ class DyadJoint(_Spec):
 
 
 @dataclass(frozen=True, eq=False)
+class HingeJoint(_Spec):
+    """The input at a moving hinge: joints ``name`` (the hinge H) and ``far`` (X) at once.
+
+    A motor between two moving links turns the angle at H, from its link to ``y`` (length
+    ``b``) to its link to X (length ``a``), through ``phase + θ``; X hangs from ``z`` by a link
+    of length ``r`` (:class:`linkwright.engine.hinge_steps.Hinge`). ``assembly`` is X's side:
+    ``sign((y − z) × (X − z))``, as a dyad's. A linkage with a hinge has no crank: the hinge is
+    its input.
+
+    Examples
+    --------
+    A four-bar driven at its coupler–rocker hinge B: the angle at B is the input.
+
+    >>> import numpy as np
+    >>> from linkwright import Linkage, solve
+    >>> hinge = Linkage(joints=[FixedJoint("A0", [0, 0]), FixedJoint("B0", [4, 0]),
+    ...                         HingeJoint("B", "A", "A0", 1.0, "B0", 3.5, 3.0)], traced="B")
+    >>> m = solve(hinge, [np.pi / 2])
+    >>> float(np.hypot(*m.positions["A"][0]).round(12)), bool(m.valid[0])
+    (1.0, True)
+    """
+
+    name: str
+    far: str
+    z: str
+    r: ArrayLike
+    y: str
+    a: ArrayLike
+    b: ArrayLike
+    phase: ArrayLike = 0.0
+    assembly: ArrayLike = 1.0
+
+    type: ClassVar[str] = "hinge"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.z, self.y)
+
+    @property
+    def placed(self) -> tuple[str, ...]:
+        """The joints it places: the hinge, then X."""
+        return (self.name, self.far)
+
+
+@dataclass(frozen=True, eq=False)
 class SliderJoint(_Spec):
     """A slider pin (an RRP dyad): at ``r`` from ``p1``, on the guide line through the joint
     ``line_point`` at the fixed absolute angle ``line_angle`` (radians).
@@ -381,11 +432,13 @@ Joint = (
     | RigidJoint
     | SphereCrankJoint
     | SphereRigidJoint
+    | HingeJoint
 )
 """Any joint spec."""
 
 JOINT_TYPES: dict[str, type[Joint]] = {
-    cls.type: cls for cls in (FixedJoint, CrankJoint, DyadJoint, SliderJoint, RigidJoint)
+    cls.type: cls
+    for cls in (FixedJoint, CrankJoint, DyadJoint, SliderJoint, RigidJoint, HingeJoint)
 }
 """Document ``type`` → joint spec class, in the plane."""
 
@@ -407,6 +460,13 @@ _NUMERIC: dict[type, dict[str, str]] = {
     DyadJoint: {"r1": "length", "r2": "length", "assembly": "sign"},
     SliderJoint: {"r": "length", "line_angle": "number", "assembly": "sign"},
     RigidJoint: {"u": "number", "v": "number"},
+    HingeJoint: {
+        "r": "length",
+        "a": "length",
+        "b": "length",
+        "phase": "number",
+        "assembly": "sign",
+    },
     SphereCrankJoint: {"arc": "arc", "ratio": "ratio", "phase": "number"},
     SphereRigidJoint: {"arc": "offset", "angle": "number"},
 }
@@ -418,9 +478,15 @@ REFERENCES: dict[type, tuple[str, ...]] = {
     DyadJoint: ("p1", "p2"),
     SliderJoint: ("p1", "line_point"),
     RigidJoint: ("origin", "toward"),
+    HingeJoint: ("z", "y"),
     SphereCrankJoint: ("pivot", "toward"),
     SphereRigidJoint: ("origin", "toward"),
 }
+
+
+def placed_by(joint: Joint) -> tuple[str, ...]:
+    """The joints a spec places: its name, and a hinge's far joint too."""
+    return joint.placed if isinstance(joint, HingeJoint) else (joint.name,)
 
 
 def numeric_kinds(joint: Joint, space: str) -> dict[str, str]:

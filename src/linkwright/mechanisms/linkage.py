@@ -1,10 +1,11 @@
 """Family ``linkage``: a planar or spherical linkage the user composes joint by joint.
 
 A :class:`Linkage` is an ordered tuple of joint specs, each placing one joint from joints listed
-before it, exactly as the engine's construction plans do (see DESIGN.md). The specs, in the
-plane and on the sphere, and their assembly signs are described in :mod:`.joints`
-(:class:`FixedJoint`, :class:`CrankJoint`, :class:`DyadJoint`, :class:`SliderJoint`,
-:class:`RigidJoint`, :class:`SphereCrankJoint`, :class:`SphereRigidJoint`); the checks that
+before it (a driven hinge places two), exactly as the engine's construction plans do (see
+DESIGN.md). The specs, in the plane and on the sphere, and their assembly signs are described
+in :mod:`.joints` (:class:`FixedJoint`, :class:`CrankJoint`, :class:`DyadJoint`,
+:class:`SliderJoint`, :class:`RigidJoint`, :class:`HingeJoint`, :class:`SphereCrankJoint`,
+:class:`SphereRigidJoint`); the checks that
 refuse an ill-formed construction are in :mod:`.linkage_checks`. Both are re-exported here.
 
 Mobility, as a sanity line (Grübler: M = 3(n − 1) − 2j for n links and j lower pairs, the same
@@ -12,10 +13,12 @@ count on the sphere, where a body also has three freedoms, its rotations about O
 adds one link and one pin, and its angle is the input (a second crank is geared to the input,
 one more constraint); a dyad adds two links and three pins, 3·2 − 2·3 = 0; a slider pin adds a
 rod and a block with two pins and one slide, 3·2 − 2·3 = 0 again; a rigid point adds nothing.
-So a linkage built this way has exactly one degree of freedom: the four-bar (n = 4, j = 4)
-gives 3·3 − 8 = 1, Jansen's leg (n = 8, j = 10) 3·7 − 20 = 1. What a user *can* write wrongly
-is therefore an ill-formed construction, and :class:`Linkage` refuses each kind with one
-message that names the joint (:class:`InvalidLinkage`).
+A driven hinge adds three links (z–X, X–H, H–y) and four pins, 3·3 − 2·4 = 1, the freedom its
+angle takes as the input in place of a crank's. So a linkage built this way has exactly one
+degree of freedom: the four-bar (n = 4, j = 4) gives 3·3 − 8 = 1, Jansen's leg (n = 8,
+j = 10) 3·7 − 20 = 1. What a user *can* write wrongly is therefore an ill-formed construction,
+and :class:`Linkage` refuses each kind with one message that names the joint
+(:class:`InvalidLinkage`).
 
 Parameter names are ``"<joint>.<field>"`` (``"B.r1"``, ``"A0.at"``): two linkages of one
 structure compile to equal plans, and batches (arrays with a leading batch shape) work as in
@@ -48,6 +51,7 @@ from linkwright.engine import (
     SphereRigid,
 )
 from linkwright.engine.evaluate import batch_shape
+from linkwright.engine.hinge_steps import Hinge
 from linkwright.geometry import plane, sphere
 from linkwright.mechanisms.base import Mechanism, family_dataclass
 from linkwright.mechanisms.joints import (
@@ -59,6 +63,7 @@ from linkwright.mechanisms.joints import (
     CrankJoint,
     DyadJoint,
     FixedJoint,
+    HingeJoint,
     InvalidLinkage,
     Joint,
     RigidJoint,
@@ -66,6 +71,7 @@ from linkwright.mechanisms.joints import (
     SphereCrankJoint,
     SphereRigidJoint,
     numeric_kinds,
+    placed_by,
     unit_axis,
 )
 from linkwright.mechanisms.linkage_checks import (
@@ -86,6 +92,7 @@ __all__ = [
     "CrankJoint",
     "DyadJoint",
     "FixedJoint",
+    "HingeJoint",
     "InvalidLinkage",
     "Joint",
     "Linkage",
@@ -268,7 +275,7 @@ about the guide's pole; write that DyadJoint instead
             raise InvalidLinkage("a linkage needs joints: at least a fixed pivot and a crank")
         space = self.space
         specs = ALL_SPECS
-        names = {j.name for j in raw if isinstance(j, specs) and isinstance(j.name, str)}
+        names = {n for j in raw if isinstance(j, specs) for n in placed_by(j) if isinstance(n, str)}
         seen: dict[str, int] = {}
         out: list[Joint] = []
         for index, joint in enumerate(raw):
@@ -294,6 +301,20 @@ about the guide's pole; write that DyadJoint instead
                 )
             if type(joint) not in SPACES[space].values():
                 raise InvalidLinkage(wrong_space(joint, space), index=index, joint=name)
+            if isinstance(joint, HingeJoint):
+                far = joint.far
+                if not isinstance(far, str) or not far or far == name or far in seen:
+                    what = (
+                        "a non-empty joint name other than the hinge's"
+                        if not isinstance(far, str) or not far or far == name
+                        else f"a new joint's name ({far!r} is listed at joints[{seen[far]}])"
+                    )
+                    raise InvalidLinkage(
+                        f"joint {name!r}: far must be {what}, got {far!r}",
+                        index=index,
+                        joint=name,
+                        field="far",
+                    )
             if isinstance(joint, SphereCrankJoint) and joint.toward is None:
                 joint = replace(joint, toward=default_toward(joint, out, index))
             for attr in REFERENCES[type(joint)]:
@@ -329,6 +350,7 @@ about the guide's pole; write that DyadJoint instead
                     "rrr": "a dyad needs two different joints: one link to each",
                     "rrp": "the slider's rod and its guide need two different joints",
                     "rigid": "a link's frame needs two different joints",
+                    "hinge": "the far joint hangs from z and the hinge from y: two joints",
                 }[joint.type]
                 attrs = REFERENCES[type(joint)]
                 raise InvalidLinkage(
@@ -342,10 +364,22 @@ about the guide's pole; write that DyadJoint instead
                 for attr, what in numeric_kinds(joint, space).items()
             }
             out.append(replace(joint, **values))
-            seen[name] = index
-        if not any(isinstance(j, CrankJoint | SphereCrankJoint) for j in out):
+            for placed in placed_by(joint):
+                seen[placed] = index
+        hinges = [k for k, j in enumerate(out) if isinstance(j, HingeJoint)]
+        if not hinges and not any(isinstance(j, CrankJoint | SphereCrankJoint) for j in out):
             raise InvalidLinkage(
-                "nothing drives the linkage: none of its joints is a crank (under-constrained)"
+                "nothing drives the linkage: none of its joints is a crank or a driven hinge "
+                "(under-constrained)"
+            )
+        cranks = [k for k, j in enumerate(out) if isinstance(j, CrankJoint)]
+        if hinges and (cranks or len(hinges) > 1):
+            k = (cranks + hinges[1:])[0]
+            raise InvalidLinkage(
+                f"joint {out[k].name!r}: the hinge {out[hinges[0]].name!r} already drives the "
+                "linkage (its one input); a second input over-constrains it",
+                index=k,
+                joint=out[k].name,
             )
         return tuple(out)
 
@@ -360,7 +394,7 @@ about the guide's pole; write that DyadJoint instead
         traced = tuple(traced)
         if not traced:
             raise InvalidLinkage("traced: name at least one joint", field="traced")
-        names = [j.name for j in joints]
+        names = [n for j in joints for n in placed_by(j)]
         for i, name in enumerate(traced):
             if not isinstance(name, str) or name not in names:
                 raise InvalidLinkage(
@@ -385,7 +419,7 @@ about the guide's pole; write that DyadJoint instead
     @property
     def reported_joints(self) -> tuple[str, ...]:  # type: ignore[override]
         """Every joint, in construction order."""
-        return tuple(j.name for j in self.joints)
+        return tuple(n for j in self.joints for n in placed_by(j))
 
     @property
     def traced_joint(self) -> str:  # type: ignore[override]
@@ -418,17 +452,18 @@ about the guide's pole; write that DyadJoint instead
     def joint(self, name: str) -> Joint:
         """The spec of the joint called ``name`` (``KeyError`` if there is none)."""
         for j in self.joints:
-            if j.name == name:
+            if name in placed_by(j):
                 return j
         raise KeyError(name)
 
     @property
     def assemblies(self) -> dict[str, Array]:
-        """Each dyad's and slider's assembly sign, by joint name, in construction order."""
+        """Each dyad's, slider's and driven hinge's assembly sign, by joint name, in
+        construction order."""
         return {
             j.name: j.assembly  # type: ignore[misc]
             for j in self.joints
-            if isinstance(j, DyadJoint | SliderJoint)
+            if isinstance(j, DyadJoint | SliderJoint | HingeJoint)
         }
 
     @property
@@ -452,6 +487,8 @@ about the guide's pole; write that DyadJoint instead
                 sizes.append(np.asarray(j.r))
             elif isinstance(j, RigidJoint):  # the sphere's joints are not met in the plane
                 sizes.append(np.hypot(j.u, j.v))
+            elif isinstance(j, HingeJoint):
+                sizes += [np.asarray(j.r), np.asarray(j.a), np.asarray(j.b)]
         for i, p in enumerate(pivots):
             sizes += [plane.norm(p - q) for q in pivots[:i]]
         largest: Array = np.maximum.reduce(np.broadcast_arrays(*sizes))
@@ -479,7 +516,7 @@ about the guide's pole; write that DyadJoint instead
 
         def resigned(j: Joint) -> Joint:
             # Only dyads and sliders are in ``signs`` (it was checked against ``assemblies``).
-            if isinstance(j, DyadJoint | SliderJoint) and j.name in signs:
+            if isinstance(j, DyadJoint | SliderJoint | HingeJoint) and j.name in signs:
                 return replace(j, assembly=signs[j.name])
             return j
 
@@ -530,6 +567,15 @@ about the guide's pole; write that DyadJoint instead
                 rel = pos[n] - o
                 out[f"{n}.u"] = (plane.dot(rel, e) - np.asarray(j.u)[..., None]) / s
                 out[f"{n}.v"] = (plane.cross(e, rel) - np.asarray(j.v)[..., None]) / s
+            elif isinstance(j, HingeJoint):
+                out[f"{j.far}.r"] = dist(j.z, j.far, j.r) / s
+                out[f"{n}.a"] = dist(j.far, n, j.a) / s
+                out[f"{n}.b"] = dist(j.y, n, j.b) / s
+                # The angle at H against phase + θ, as the sideways error of X (a length).
+                phi = np.asarray(j.phase)[..., None] + motion.input
+                to_y = (pos[j.y] - pos[n]) / plane.norm(pos[j.y] - pos[n])[..., None]
+                turned = np.cos(phi)[..., None] * to_y + np.sin(phi)[..., None] * plane.perp(to_y)
+                out[f"{n}.angle"] = plane.cross(turned, pos[j.far] - pos[n]) / s
         return out
 
     def _sphere_residuals(self, motion: Motion) -> dict[str, Array]:
@@ -610,6 +656,12 @@ def _compile(
         elif isinstance(j, SliderJoint):
             steps.append(
                 DyadRRP(n, j.p1, key("r"), j.line_point, key("line_angle"), branch=key("assembly"))
+            )
+        elif isinstance(j, HingeJoint):
+            # The step's branch is a pose index: 0 for the assembly sign −1, 1 for +1.
+            params[f"{n}.pose"] = (np.asarray(j.assembly, dtype=float) + 1.0) / 2.0
+            steps.append(
+                Hinge(n, j.far, j.z, key("r"), j.y, key("a"), key("b"), key("phase"), f"{n}.pose")
             )
         else:
             steps.append(Rigid(n, j.origin, j.toward, key("u"), key("v")))

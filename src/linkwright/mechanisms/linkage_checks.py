@@ -21,6 +21,7 @@ from linkwright.mechanisms.joints import (
     CrankJoint,
     DyadJoint,
     FixedJoint,
+    HingeJoint,
     InvalidLinkage,
     Joint,
     RigidJoint,
@@ -198,6 +199,8 @@ def check_bodies(joints: tuple[Joint, ...]) -> None:
                 c.add(j.name)
             if not shared:
                 clusters += [{j.p1, j.name}, {j.p2, j.name}]
+        elif isinstance(j, HingeJoint):
+            clusters += [{j.z, j.far}, {j.far, j.name}, {j.name, j.y}]
         elif isinstance(j, SliderJoint):
             # The guide keeps its direction, so only a grounded rod on a grounded guide is rigid
             # with anything beyond the rod itself.
@@ -236,6 +239,8 @@ def _construction(j: Joint, space: str) -> tuple[tuple[Any, ...], ...]:
         )
     if isinstance(j, SliderJoint):
         return (("rrp", j.p1, j.r, j.line_point, j.line_angle, j.assembly),)
+    if isinstance(j, HingeJoint):
+        return (("hinge", j.z, j.r, j.y, j.a, j.b, j.phase, j.assembly),)
     if isinstance(j, SphereRigidJoint):
         return (("rigid", j.origin, j.toward, j.arc, j.angle),)
     return (("rigid", j.origin, j.toward, j.u, j.v),)

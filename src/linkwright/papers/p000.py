@@ -39,7 +39,9 @@ re-exports their public names as before.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -73,6 +75,9 @@ from linkwright.papers.p000_formulas import (
     eq5_theta4,
     eq13_coupler_point,
 )
+
+if TYPE_CHECKING:  # matplotlib is imported only where a figure is drawn
+    from matplotlib.figure import Figure
 
 __all__ = [
     "FIG6",
@@ -110,7 +115,7 @@ def _e(x: float) -> str:
     return f"{x:.1e}".replace("-", "−")
 
 
-def _save_both(fig, out: Path, stem: str) -> list[Path]:
+def _save_both(fig: Figure, out: Path, stem: str) -> list[Path]:
     from linkwright.plot import save_figure
 
     return [save_figure(fig, out / f"{stem}.png"), save_figure(fig, out / f"{stem}.svg")]
@@ -199,7 +204,7 @@ def reproduce(out: str | Path, *, samples: int = 360) -> list[Path]:
     return written
 
 
-def _write_csv(path: Path, rows: list) -> Path:
+def _write_csv(path: Path, rows: Sequence[Any]) -> Path:
     """One row per check (a dataclass), its fields as the columns (:func:`_csv_cell`)."""
     import csv
     import dataclasses

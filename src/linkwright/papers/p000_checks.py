@@ -15,10 +15,13 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from linkwright.engine import Motion
 from linkwright.geometry import sphere
 from linkwright.mechanisms import (
     SphericalFourBar,
+    SphericalSixBar,
     circuit,
     solve,
 )
@@ -64,7 +67,16 @@ class PointCheck:
     infinite)."""
 
 
-def _point_check(case: str, motion, origin: str, toward: str, point: str, ab, ac, mu) -> PointCheck:
+def _point_check(
+    case: str,
+    motion: Motion,
+    origin: str,
+    toward: str,
+    point: str,
+    ab: ArrayLike,
+    ac: ArrayLike,
+    mu: ArrayLike,
+) -> PointCheck:
     pos = motion.positions
     ref = pos[point]
     err = {
@@ -118,11 +130,13 @@ def point_checks(samples: int = 360) -> list[PointCheck]:
                 _point_check(case, motion, "A", "B", "P", m.coupler, m.point_arc, m.point_angle)
             )
     for assembly2 in (1.0, -1.0):
-        m = figure_sixbar(-1.0, -1.0, assembly2)
-        motion = circuit(m, samples, order=0)
+        six = figure_sixbar(-1.0, -1.0, assembly2)
+        motion = circuit(six, samples, order=0)
         case = f"Fig. 8 (ε −30°, assembly −1), assembly2 {sign_label(assembly2)}"
-        out.append(_point_check(case, motion, "A", "B", "C", m.coupler, m.point_arc, m.point_angle))
-        out.append(_point_check(case, motion, "C", "E", "D", m.link5, m.d_arc, m.d_angle))
+        out.append(
+            _point_check(case, motion, "A", "B", "C", six.coupler, six.point_arc, six.point_angle)
+        )
+        out.append(_point_check(case, motion, "C", "E", "D", six.link5, six.d_arc, six.d_angle))
     return out
 
 
@@ -170,7 +184,7 @@ def degradation(
     ('Fig. 6, assembly +1', inf, True)
     """
     fine = np.logspace(-10, 1, 221)
-    cases = [
+    cases: list[tuple[str, SphericalFourBar | SphericalSixBar]] = [
         (f"Fig. {n}, assembly {sign_label(a)}", figure_fourbar(n, a))
         for n in (6, 7)
         for a in (1.0, -1.0)
@@ -179,7 +193,7 @@ def degradation(
     out = []
     for case, m in cases:
 
-        def errors(d: Array, line: str, m=m) -> Array:
+        def errors(d: Array, line: str, m: SphericalFourBar | SphericalSixBar = m) -> Array:
             d = np.radians(np.asarray(d, dtype=float))
             theta = np.concatenate([c + s * d for c in (0.0, math.pi) for s in (1.0, -1.0)])
             motion = solve(m, theta, order=0)
@@ -190,7 +204,8 @@ def degradation(
             )
             e = sphere.norm(c - pos[joint])
             e = np.where(np.isnan(e), np.inf, e).reshape(4, -1)
-            return e.max(axis=0)
+            worst: Array = e.max(axis=0)
+            return worst
 
         first = errors(np.asarray(deltas), "first")
         better = errors(np.asarray(deltas), "better")
@@ -252,7 +267,7 @@ def alpha90_sweep(
     """
     from scipy.optimize import brentq
 
-    cases = [
+    cases: list[tuple[str, SphericalFourBar | SphericalSixBar, tuple[str, str, str]]] = [
         (f"Fig. {n}, assembly {sign_label(a)}", figure_fourbar(n, a), ("A", "B", "P"))
         for n in (6, 7)
         for a in (1.0, -1.0)
@@ -263,11 +278,17 @@ def alpha90_sweep(
     out = []
     for case, m, (origin, toward, point) in cases:
         if point == "D":
+            assert isinstance(m, SphericalSixBar)  # D is Fig. 8's second coupler point
             ab, ac, mu = m.link5, m.d_arc, m.d_angle
         else:
             ab, ac, mu = m.coupler, m.point_arc, m.point_angle
 
-        def tilt(theta, m=m, origin=origin, point=point) -> Array:
+        def tilt(
+            theta: ArrayLike,
+            m: SphericalFourBar | SphericalSixBar = m,
+            origin: str = origin,
+            point: str = point,
+        ) -> Array:
             pos = solve(m, np.atleast_1d(theta), order=0).positions
             return sphere.cross(pos[origin], pos[point])[..., 2]
 

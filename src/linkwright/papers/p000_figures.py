@@ -74,9 +74,8 @@ def figure_fourbar(number: int, assembly: float = 1.0) -> SphericalFourBar:
     if number not in table:
         raise InvalidInput(f"number: paper 000's four-bars are Figs 6 and 7, not {number!r}")
     f = table[number]
-    return SphericalFourBar(
-        *np.radians([f["a1"], f["a2"], f["a3"], f["a4"], f["AC"], f["mu"]]), assembly=assembly
-    )
+    a1, a2, a3, a4, ac, mu = np.radians([f["a1"], f["a2"], f["a3"], f["a4"], f["AC"], f["mu"]])
+    return SphericalFourBar(a1, a2, a3, a4, ac, mu, assembly=assembly)
 
 
 def figure_sixbar(
@@ -111,8 +110,17 @@ def figure_sixbar(
     if epsilon_sign not in (-1, 1):
         raise InvalidInput(f"epsilon_sign: must be -1 or +1, got {epsilon_sign!r}")
     f = FIG8
+    arcs = np.radians([f["a1"], f["a2"], f["a3"], f["a4"], f["AC"], f["mu"], f["a5"], f["a6"]])
+    a1, a2, a3, a4, ac, mu, a5, a6 = arcs
     return SphericalSixBar(
-        *np.radians([f["a1"], f["a2"], f["a3"], f["a4"], f["AC"], f["mu"], f["a5"], f["a6"]]),
+        a1,
+        a2,
+        a3,
+        a4,
+        ac,
+        mu,
+        a5,
+        a6,
         ground_arc=np.radians(f["B0E0"]),
         ground_angle=np.radians(epsilon_sign * f["epsilon"]),
         d_arc=np.radians(f["CD"]),

@@ -80,7 +80,7 @@ def _vectors(x: ArrayLike, name: str) -> Array:
 
 
 def eq5_theta4(
-    a1: ArrayLike, a2: ArrayLike, a3: ArrayLike, a4: ArrayLike, theta2: ArrayLike, *, sign=-1
+    a1: ArrayLike, a2: ArrayLike, a3: ArrayLike, a4: ArrayLike, theta2: ArrayLike, *, sign: int = -1
 ) -> Array:
     """θ4, the rocker angle, from the crank angle θ2 by paper 000's eq. 5 (after McCarthy).
 
@@ -128,14 +128,19 @@ def eq5_theta4(
         raise InvalidInput(f"sign: must be -1 or +1, got {sign!r}")
     p, q, u = eq5_pqu(a1, a2, a3, a4, t)
     with np.errstate(invalid="ignore", divide="ignore"):
-        return 2.0 * np.arctan((p + sign * np.sqrt(p * p - u * u + q * q)) / (q + u))
+        theta4: Array = 2.0 * np.arctan((p + sign * np.sqrt(p * p - u * u + q * q)) / (q + u))
+    return theta4
 
 
-def eq5_pqu(a1, a2, a3, a4, t) -> tuple[Array, Array, Array]:
+def eq5_pqu(
+    a1: ArrayLike, a2: ArrayLike, a3: ArrayLike, a4: ArrayLike, t: ArrayLike
+) -> tuple[Array, Array, Array]:
     """Eq. 5's p, q and u, as printed."""
-    p = np.sin(a2) * np.sin(a4) * np.sin(t)
-    q = np.sin(a2) * np.sin(a4) * np.cos(a1) * np.cos(t) - np.cos(a2) * np.sin(a4) * np.sin(a1)
-    u = (
+    p: Array = np.sin(a2) * np.sin(a4) * np.sin(t)
+    q: Array = np.sin(a2) * np.sin(a4) * np.cos(a1) * np.cos(t) - np.cos(a2) * np.sin(a4) * np.sin(
+        a1
+    )
+    u: Array = (
         np.cos(a3)
         - np.cos(a1) * np.cos(a2) * np.cos(a4)
         - np.sin(a2) * np.cos(a4) * np.sin(a1) * np.cos(t)

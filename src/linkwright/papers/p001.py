@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from linkwright.papers import p001_circuits
 from linkwright.papers.p001_checks import (
@@ -85,7 +86,7 @@ def _num(x: float, digits: int = 4) -> str:
     return "" if not np.isfinite(x) else f"{x + 0.0:.{digits}f}"
 
 
-def _listed(counts: Array) -> str:
+def _listed(counts: NDArray[np.int_]) -> str:
     values = [str(v) for v in np.unique(counts)]
     return ", ".join(values[:-1]) + " and " + values[-1] if len(values) > 1 else values[0]
 
@@ -99,7 +100,7 @@ def _runs(degrees: Array) -> str:
     return ", ".join(f"{p[0]:g}°–{p[-1]:g}°" if len(p) > 1 else f"{p[0]:g}°" for p in parts)
 
 
-def _histogram(counts: Array, top: int) -> str:
+def _histogram(counts: NDArray[np.int_], top: int) -> str:
     return ", ".join(
         f"{k}: {int((counts == k).sum())}" for k in range(top + 1) if (counts == k).any()
     )
@@ -280,11 +281,11 @@ def reproduce(out: str | Path) -> list[Path]:
         "largest gap (°) |",
         "|---|---|---|---|---|---|",
     ]
-    for r in eq20:
+    for row in eq20:
         lines.append(
-            f"| {r['x4']:.6f} | {r['degree']} | {', '.join(_num(x) for x in r['real'])} | "
-            f"{', '.join(_num(x) for x in r['coupler'])} | "
-            f"{', '.join(_num(x) for x in r['mirror'])} | {r['gap']:.1e} |"
+            f"| {row['x4']:.6f} | {row['degree']} | {', '.join(_num(x) for x in row['real'])} | "
+            f"{', '.join(_num(x) for x in row['coupler'])} | "
+            f"{', '.join(_num(x) for x in row['mirror'])} | {row['gap']:.1e} |"
         )
     lines += [
         "",

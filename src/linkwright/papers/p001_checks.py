@@ -13,7 +13,7 @@ configurations occur when the linkage is driven at FG (:data:`EXAMPLE`, :func:`c
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,6 +27,7 @@ __all__ = [
     "EXAMPLE",
     "EXAMPLE_INPUT",
     "MIRROR_INPUT",
+    "CountSweep",
     "configuration_table",
     "count_sweep",
     "eq18_check",
@@ -82,10 +83,23 @@ def _pair(
 
 
 def _deg(x: Any) -> Array:
-    return np.degrees(np.asarray(x, dtype=float))
+    degrees: Array = np.degrees(np.asarray(x, dtype=float))
+    return degrees
 
 
-def count_sweep(samples: int = 360) -> dict[str, Array]:
+class CountSweep(TypedDict):
+    """:func:`count_sweep`'s answer: the input grid (degrees), the counts and the residuals."""
+
+    input: Array
+    ab: NDArray[np.int_]
+    ab_residual: Array
+    fg: NDArray[np.int_]
+    fg_residual: Array
+    ab_mirror: NDArray[np.int_]
+    ab_either: NDArray[np.int_]
+
+
+def count_sweep(samples: int = 360) -> CountSweep:
     """Configurations of :data:`EXAMPLE` over a whole turn of each input (degrees).
 
     Returns ``input`` (the input angle, degrees, the same grid for θ1 and θ6), ``ab`` and
@@ -106,9 +120,10 @@ def count_sweep(samples: int = 360) -> dict[str, Array]:
     mirror = solve_all(example("AB", mirror=True), rad)
 
     def worst(r: Array) -> Array:
-        return np.where(
+        largest: Array = np.where(
             np.isfinite(r).any(axis=-1), np.nanmax(np.nan_to_num(r, nan=-1.0), -1), np.nan
         )
+        return largest
 
     return {
         "input": theta,
@@ -160,13 +175,14 @@ def _system4(m: SphericalStephenson3, b: Array, c: Array, e: Array) -> Array:
     """Largest error of paper 001's system (4): B·C, C·E and B·E, which fix only cos σ."""
     a3, a6, s = m.a3, m.a6, m.sigma
     be = np.cos(a3) * np.cos(a6) - np.sin(a3) * np.sin(a6) * np.cos(s)
-    return np.maximum.reduce(
+    largest: Array = np.maximum.reduce(
         [
             np.abs(sphere.dot(b, c) - np.cos(a3)),
             np.abs(sphere.dot(c, e) - np.cos(a6)),
             np.abs(sphere.dot(b, e) - be),
         ]
     )
+    return largest
 
 
 def mirror_check(

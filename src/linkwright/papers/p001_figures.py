@@ -8,11 +8,12 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from linkwright.geometry import sphere
 from linkwright.mechanisms import solve_all
 from linkwright.papers.p001_angles import paper_angles
-from linkwright.papers.p001_checks import EXAMPLE, EXAMPLE_INPUT, Array, example
+from linkwright.papers.p001_checks import EXAMPLE, EXAMPLE_INPUT, Array, CountSweep, example
 
 __all__ = ["configurations_figure", "counts_figure"]
 
@@ -54,14 +55,14 @@ def _draw_configuration(ax: Any, view: Any, pos: dict[str, Array], title: str) -
     ax.set_axis_off()
 
 
-def counts_figure(sweep: dict[str, Array]) -> Any:
+def counts_figure(sweep: CountSweep) -> Any:
     from linkwright.plot import new_figure
 
     fig = new_figure((8.0, 5.6))
     top, bottom = fig.subplots(2, 1, sharex=True)
     theta = np.append(sweep["input"], 360.0)
 
-    def steps(ax: Any, counts: Array, **style: Any) -> None:
+    def steps(ax: Any, counts: NDArray[np.int_], **style: Any) -> None:
         ax.step(theta, np.append(counts, counts[0]), where="post", **style)
 
     steps(

@@ -83,21 +83,24 @@ def _half_angle_checks(seed: int = 1) -> dict[str, float]:
     )  # fmt: skip
 
     def quad1(c: Array) -> Array:  # eq. 15's left column with the letter c
-        return (c[3] - c[1]) * x4**2 + 2 * c[2] * x4 + (c[1] + c[3])
+        value: Array = (c[3] - c[1]) * x4**2 + 2 * c[2] * x4 + (c[1] + c[3])
+        return value
 
     def quad_k(const: Array) -> Array:  # eq. 15's right column, constant term of a23 given
         a21 = x5**2 * (k[2] + k[5] - k[7] + k[8]) + x5 * (2 * k[6] - 2 * k[3])
         a21 = a21 + (k[8] - k[2] - k[5] - k[7])
         a22 = -2 * k[4] * x5**2 + 4 * k[1] * x5 + 2 * k[4]
         a23 = x5**2 * (k[5] + k[7] + k[8] - k[2]) + x5 * (2 * k[3] + 2 * k[6]) + const
-        return a21 * x6**2 + a22 * x6 + a23
+        value: Array = a21 * x6**2 + a22 * x6 + a23
+        return value
 
     def quad_g(const: Array) -> Array:  # eq. 16 with f read as g, constant term of a33 given
         a31 = x5**2 * (g[2] - g[5] - g[6] + g[8]) + x5 * (2 * g[7] - 2 * g[3])
         a31 = a31 + (g[8] + g[6] - g[5] - g[2])
         a32 = -2 * g[4] * x5**2 + 4 * g[1] * x5 + 2 * g[4]
         a33 = x5**2 * (g[5] + g[8] - g[2] - g[6]) + x5 * (2 * g[3] + 2 * g[7]) + const
-        return a31 * x6**2 + a32 * x6 + a33
+        value: Array = a31 * x6**2 + a32 * x6 + a33
+        return value
 
     def rel(a: Array, b: Array) -> float:
         return float(np.max(np.abs(a - b) / (np.abs(a) + np.abs(b) + 1e-300)))
@@ -162,7 +165,10 @@ def misprints() -> list[Misprint]:
             "G = (0, sin(a1 + a9), cos(a1 + a9)): at arc a1 + a9 from A, beyond D",
             f"arc DG = {arc_printed:.6f}° with the printed G, {arc_ours:.12f}° with the "
             f"corrected one; DG should be a9 = {np.degrees(m.a9):g}°",
-            abs(arc_printed - np.degrees(m.a9)) > 1e-6 and abs(arc_ours - np.degrees(m.a9)) < 1e-9,
+            bool(
+                abs(arc_printed - np.degrees(m.a9)) > 1e-6
+                and abs(arc_ours - np.degrees(m.a9)) < 1e-9
+            ),
         )
     )
 
@@ -184,7 +190,7 @@ def misprints() -> list[Misprint]:
         )
     )
 
-    start = _rx(m.a8) @ g  # G turned by a8 about X: at arc a8 from G, on the great circle AG
+    start = _rx(float(m.a8)) @ g  # G turned by a8 about X: at arc a8 from G, on the great circle AG
     about_z = np.einsum("nij,j->ni", np.stack([_rz(t) for t in theta6]), start)
     about_g = sphere.rotate(start, g, theta6)
     err_z = np.degrees(np.abs(sphere.arc(about_z, g) - m.a8)).max()

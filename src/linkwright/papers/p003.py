@@ -45,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from linkwright.analysis import (
     balanced_mu,
@@ -130,7 +131,9 @@ def reproduce_planar() -> list[Cell]:
     """Every planar cell of paper 003's Tables 1, 2 and 4, beside linkwright's values."""
     cells: list[Cell] = []
 
-    def add(table, row, column, printed, values, exact_index=0):
+    def add(
+        table: str, row: str, column: str, printed: str, values: ArrayLike, exact_index: int = 0
+    ) -> None:
         vals = np.asarray(values, dtype=float)
         key = (table, row, column)
         cells.append(
@@ -243,7 +246,15 @@ def reproduce_spherical() -> list[Cell]:
     """
     cells: list[Cell] = []
 
-    def add(table, row, column, printed, values, grid=None, literal=None):
+    def add(
+        table: str,
+        row: str,
+        column: str,
+        printed: str,
+        values: ArrayLike,
+        grid: float | None = None,
+        literal: float | None = None,
+    ) -> None:
         vals = np.atleast_1d(np.asarray(values, dtype=float))
         low, high = float(vals.min()), float(vals.max())
         cells.append(
@@ -306,7 +317,9 @@ SYNTHESIS_GRID = 17
 """Grid nodes per free arc for the synthesis search (α2 and α3 over 1°…179°)."""
 
 
-def _reading(crank: float, alpha2: float, alpha3: float, extra: dict | None = None) -> dict:
+def _reading(
+    crank: float, alpha2: float, alpha3: float, extra: dict[str, Any] | None = None
+) -> dict[str, Any]:
     """One mechanism of the example with its exact coefficients, in degrees."""
     co = coefficients(_sphere(crank, alpha2, alpha3, 10.0))
     k = np.array([float(co["K_epsilon"]), float(co["K_p"])])

@@ -67,7 +67,7 @@ def markdown(cells: list[Cell], synthesis: dict[str, Any] | None = None) -> str:
     the paper; each cell is ``printed · ours mark``."""
     index = {(c.table, c.side, c.row, c.column): c for c in cells}
 
-    def cell(table, side, row, column):
+    def cell(table: str, side: str, row: str, column: str) -> str:
         c = index.get((table, side, row, column))
         return _show(c) if c is not None else "—"
 
@@ -115,14 +115,15 @@ def markdown(cells: list[Cell], synthesis: dict[str, Any] | None = None) -> str:
         "| α1 | α2 | μ | max ν_n | min ν_n | max ν_τ | min ν_τ | L4 | L3 | max ν | min ν |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for srow_data, prow in zip(TABLE2_SPHERICAL, TABLE2_PLANAR, strict=True):
+    for srow_data, lrow_data in zip(TABLE2_SPHERICAL, TABLE2_PLANAR, strict=True):
         x1, x2 = srow_data[:2]
-        srow, lrow = f"α1={x1}, α2={x2}", f"L4={format_number(prow[0])}, L3={prow[1]}"
+        srow = f"α1={x1}, α2={x2}"
+        lrow = f"L4={format_number(lrow_data[0])}, L3={lrow_data[1]}"
         cols = ("mu", "nu_n_max", "nu_n_min", "nu_t_max", "nu_t_min")
         lines.append(
             f"| {x1} | {x2} | "
             + " | ".join(cell("Table 2", "spherical", srow, k) for k in cols)
-            + f" | {format_number(prow[0])} | {prow[1]} | "
+            + f" | {format_number(lrow_data[0])} | {lrow_data[1]} | "
             + " | ".join(cell("Table 2", "planar", lrow, k) for k in ("nu_max", "nu_min"))
             + " |"
         )

@@ -226,7 +226,7 @@ def corner_text(ax: Axes) -> Text:
 
 
 def joint_labels(ax: Axes, names: list[str]) -> dict[str, Text]:
-    where = offset_copy(ax.transData, fig=ax.figure, x=5, y=4, units="points")
+    where = offset_copy(ax.transData, fig=ax.get_figure(root=True), x=5, y=4, units="points")
     # A light box keeps a letter legible where it falls on a link or a curve. (A stroked halo
     # draws the letters as paths, and pixel snapping can then drop the foot of an "E".)
     box = {"boxstyle": "round,pad=0.12", "fc": "white", "ec": "none", "alpha": 0.75}

@@ -48,6 +48,7 @@ from linkwright.plot.sphere_view import (
     great_arc,
     sphere_links,
 )
+from linkwright.plot.style import LineKw
 
 __all__ = ["sphere_scene"]
 
@@ -137,7 +138,14 @@ def sphere_scene(mechanism: Mechanism, cycle: Cycle, title: str, dpi: int) -> Sc
     grown = [pair_of_lines(CURVES[k % len(CURVES)], 2.2, 3.6) for k in range(len(traced))]
 
     def markers(marker: str, ms: float, face: str, z: float) -> tuple[Line2D, Line2D]:
-        style = {"marker": marker, "ms": ms, "mfc": face, "mec": LINK, "ls": "none", "zorder": z}
+        style: LineKw = {
+            "marker": marker,
+            "ms": ms,
+            "mfc": face,
+            "mec": LINK,
+            "ls": "none",
+            "zorder": z,
+        }
         return ax.plot([], [], **style)[0], ax.plot([], [], alpha=0.55, **style)[0]
 
     ground_art = markers("^", 9, GROUND, 7)
@@ -145,7 +153,7 @@ def sphere_scene(mechanism: Mechanism, cycle: Cycle, title: str, dpi: int) -> Sc
     tips = [markers("o", 7, CURVES[k % len(CURVES)], 7.5) for k in range(len(traced))]
     labels = joint_labels(ax, [s.name for s in steps])
     corner = corner_text(ax)
-    body_face = np.array(to_rgba(PLATE))
+    red, green, blue, opacity = to_rgba(PLATE)
 
     def show(pts: Array, art: tuple[Line2D, Line2D]) -> None:
         pts = pts.reshape(-1, 3)
@@ -165,7 +173,9 @@ def sphere_scene(mechanism: Mechanism, cycle: Cycle, title: str, dpi: int) -> Sc
             a = np.array([at[x] for x, _ in pairs])
             b = np.array([at[y] for _, y in pairs])
             split(_polyline(_arcs(a, b, 24)), links)
-        rings, faces, outline = [], [], []
+        rings: list[Array] = []
+        faces: list[tuple[float, float, float, float]] = []
+        outline: list[Array] = []
         for o, t, p in bodies:
             ring = _arcs(np.array([at[o], at[t], at[p]]), np.array([at[t], at[p], at[o]]), 16)
             if not np.all(np.isfinite(ring)):
@@ -173,9 +183,10 @@ def sphere_scene(mechanism: Mechanism, cycle: Cycle, title: str, dpi: int) -> Sc
             outline.append(ring)
             rings.append(cam.xy(ring.reshape(-1, 3)))
             centre = at[o] + at[t] + at[p]
-            faces.append(body_face * [1, 1, 1, 0.55 if cam.depth(centre) >= 0 else 0.2])
+            shade = 0.55 if cam.depth(centre) >= 0 else 0.2
+            faces.append((red, green, blue, opacity * shade))
         body_art.set_verts(rings)
-        body_art.set_facecolors(np.array(faces).reshape(-1, 4))
+        body_art.set_facecolor(faces)
         split(_polyline(np.concatenate(outline)) if outline else np.zeros((0, 3)), edges)
         for art, name in zip(grown, traced, strict=True):
             split(pos[name][: j + 1], art)

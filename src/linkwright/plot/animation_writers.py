@@ -14,11 +14,14 @@ import os
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Protocol
 
 import matplotlib as mpl
 import numpy as np
 from matplotlib.animation import FFMpegWriter
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.transforms import BboxBase
 from numpy.typing import NDArray
 from PIL import Image
 
@@ -27,18 +30,32 @@ from linkwright.plot.animation_scene import AnimationError, Progress, Scene, exa
 __all__ = ["Renderer", "find_ffmpeg", "write_gif", "write_mp4"]
 
 
+class _BlitCanvas(Protocol):
+    """The Agg canvas's blitting methods, as :class:`Renderer` uses them (matplotlib leaves
+    FigureCanvasAgg's methods unannotated)."""
+
+    def draw(self) -> None: ...
+    def copy_from_bbox(self, bbox: BboxBase) -> object: ...
+    def restore_region(self, region: object) -> None: ...
+    def buffer_rgba(self) -> memoryview: ...
+
+
+def _blit_canvas(fig: Figure) -> _BlitCanvas:
+    canvas = fig.canvas
+    assert isinstance(canvas, FigureCanvasAgg)  # exact_figure gives every scene an Agg canvas
+    return canvas
+
+
 class Renderer:
     """Draws the still part of a scene once, then each frame's moving artists over a copy."""
 
     def __init__(self, scene: Scene) -> None:
         self.scene = scene
-        canvas = scene.fig.canvas
-        assert isinstance(canvas, FigureCanvasAgg)
-        self.canvas = canvas
+        self.canvas = _blit_canvas(scene.fig)
         for art in scene.dynamic:
             art.set_animated(True)  # left out of the full draw below: that is the backdrop
-        canvas.draw()
-        self.background = canvas.copy_from_bbox(scene.fig.bbox)
+        self.canvas.draw()
+        self.background = self.canvas.copy_from_bbox(scene.fig.bbox)
         self.order = sorted(scene.dynamic, key=lambda a: a.get_zorder())
 
     def frame(self, i: int) -> NDArray[np.uint8]:
@@ -80,7 +97,11 @@ class _Palette:
             octree = Image.fromarray(np.ascontiguousarray(rest.reshape(-1, 1, 3))).quantize(
                 256 - len(keep), method=Image.Quantize.FASTOCTREE
             )
-            used = sorted(i for _, i in octree.getcolors() or [])
+            used = []
+            for _, index in octree.getcolors() or []:
+                assert isinstance(index, int)  # a "P" image's pixels are palette indices
+                used.append(index)
+            used.sort()
             table = np.array(octree.getpalette() or [], dtype=np.int64).reshape(-1, 3)
             colours.append(table[used])
         self.colours = np.concatenate(colours)[:256]
@@ -105,7 +126,10 @@ class _Palette:
 
 def _codes(rgba: NDArray[np.uint8]) -> NDArray[np.uint32]:
     """The 24-bit colour of each opaque RGBA pixel: R + 256·G + 65536·B (one read per pixel)."""
-    return np.ascontiguousarray(rgba).view("<u4")[..., 0] & 0xFFFFFF
+    codes: NDArray[np.uint32] = np.bitwise_and(
+        np.ascontiguousarray(rgba).view("<u4")[..., 0], np.uint32(0xFFFFFF)
+    )
+    return codes
 
 
 def _decode(codes: NDArray[np.uint32]) -> NDArray[np.int64]:

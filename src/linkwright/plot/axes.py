@@ -11,8 +11,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
-__all__ = ["AxesError", "check_axes", "check_axes_list"]
+__all__ = ["AxesError", "check_axes", "check_axes_list", "figure_of"]
 
 
 class AxesError(ValueError):
@@ -90,6 +91,23 @@ def check_axes_list(axes: Any, count: int, name: str = "ax") -> list[Axes] | Non
             f"axes, got {len(found)}"
         )
     return [check_axes(a, name) for a in found]  # type: ignore[misc]
+
+
+def figure_of(ax: Axes) -> Figure:
+    """The figure a plot verb drawing into ``ax`` returns: the top-level one, also where ``ax``
+    is in a subfigure (a :class:`~matplotlib.figure.SubFigure` cannot be saved on its own).
+
+    Examples
+    --------
+    >>> from linkwright.plot import new_figure
+    >>> fig = new_figure((4, 3))
+    >>> figure_of(fig.subfigures(1, 2)[1].add_subplot()) is fig
+    True
+    """
+    fig = ax.get_figure(root=True)
+    # The stubs allow None, but an Axes is made in a figure and matplotlib refuses to move it.
+    assert fig is not None
+    return fig
 
 
 def _short(value: Any) -> str:

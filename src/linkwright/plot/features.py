@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -175,7 +176,9 @@ def _modes(mechanism: Mechanism, samples: int, *, every: bool = True) -> tuple[_
     out = []
     for signs in combos:
         params = dict(base)
-        params.update({n: np.float64(s) for n, s in zip(names, signs, strict=True)})
+        params.update(
+            {n: np.asarray(s, dtype=np.float64) for n, s in zip(names, signs, strict=True)}
+        )
         arcs = input_arcs(plan, params, points=mechanism.points)
         count = 0 if bool(arcs.never) else 1 if bool(arcs.full) else int(arcs.count)
         traced = tuple(
@@ -298,7 +301,9 @@ def _wrapped(x: float) -> float:
     return abs((x + math.pi) % (2.0 * math.pi) - math.pi)
 
 
-def _exact_dead_centres(mechanism: Mechanism, mode: _Mode) -> list[Motion]:
+def _exact_dead_centres(
+    mechanism: FourBar | SliderCrank | SphericalFourBar, mode: _Mode
+) -> list[Motion]:
     """Four-bar, slider-crank, spherical four-bar: at the exact output extremes."""
     found: list[Motion] = []
     for k, motion in enumerate(mode.circuits):
@@ -413,8 +418,8 @@ def _sampled_gamma(mechanism: Mechanism, mode: _Mode) -> list[tuple[str, float, 
             if not np.isfinite(g).any():
                 continue
             for key, pick, better in (
-                ("min", np.nanargmin, lambda a, b: a < b),
-                ("max", np.nanargmax, lambda a, b: a > b),
+                ("min", np.nanargmin, operator.lt),
+                ("max", np.nanargmax, operator.gt),
             ):
                 i = int(pick(g))
                 cur = best[key]
@@ -457,8 +462,8 @@ def _sampled_gamma(mechanism: Mechanism, mode: _Mode) -> list[tuple[str, float, 
         m = _at(mechanism, mode.params, float(x[0]), branches)
         if not bool(m.valid[0]) or float(sign * v[0]) < sign * found[0]:
             m = _at(mechanism, mode.params, float(motion.input[i]), branches)
-        g = float(_gamma_of(mechanism, m)[dyad][0])
-        out.append((key, g, m, dyad))
+        gamma = float(_gamma_of(mechanism, m)[dyad][0])
+        out.append((key, gamma, m, dyad))
     return out
 
 

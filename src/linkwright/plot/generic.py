@@ -34,7 +34,7 @@ from linkwright.mechanisms import (
     circuit,
     solve,
 )
-from linkwright.plot.axes import check_axes
+from linkwright.plot.axes import check_axes, figure_of
 from linkwright.plot.features import (
     MAX_MODE_DYADS,
     Features,
@@ -48,13 +48,14 @@ from linkwright.plot.features import (
 from linkwright.plot.notes import (
     Note,
     add_note,
+    drawn_lines,
     fit_figure,
     legend_below,
     legend_height,
     place_notes,
 )
 from linkwright.plot.planar_draw import ground_symbol, label_joints
-from linkwright.plot.style import GAMMA_COLOR, LIMIT_COLOR, deg_text, new_figure
+from linkwright.plot.style import GAMMA_COLOR, LIMIT_COLOR, LineKw, deg_text, new_figure
 
 __all__ = [
     "Features",
@@ -178,14 +179,14 @@ def draw_pose(
         is_ground = name in ground
         if is_ground and alpha == 1.0:
             ground_symbol(ax, p, size)
-        style = {"ms": 7, "mfc": "white", "mec": LINK, "mew": 1.6}
+        style: LineKw = {"marker": "o", "ms": 7, "mfc": "white", "mec": LINK, "mew": 1.6}
         if is_ground and alpha < 1.0:
-            style = {"ms": 8, "mfc": GROUND, "mec": LINK, "mew": 1.0, "marker": "^"}
+            style = {"marker": "^", "ms": 8, "mfc": GROUND, "mec": LINK, "mew": 1.0}
         elif name in traced:
-            style.update(mfc=OWN_COLOR, mec="white")
+            style["mfc"], style["mec"] = OWN_COLOR, "white"
         ax.plot(
             *p,
-            **{"marker": "o", **style},
+            **style,
             alpha=alpha,
             zorder=6,
             ls="none",
@@ -329,7 +330,7 @@ def plot_linkage(
     False
     """
     own_figure = check_axes(ax) is None
-    fig = new_figure((8.5, 7.0)) if ax is None else ax.figure
+    fig = new_figure((8.5, 7.0)) if ax is None else figure_of(ax)
     ax = ax or fig.add_subplot()
     feats = find_features(mechanism, samples)
     own = feats.own
@@ -347,6 +348,7 @@ def plot_linkage(
     others = iter(MODE_COLORS)
     colors: dict[tuple[float, ...], str] = {}
     for mode, k, p, same in mode_curves(feats, first):
+        style: LineKw
         if mode.own:
             style = {"color": OWN_COLOR, "lw": 2.3, "ls": "-", "zorder": 3.6}
         else:
@@ -428,11 +430,7 @@ def plot_linkage(
         ax.set_title(head + "\n" + "\n".join(lines), fontsize=9)
         if handles:
             ax.legend(loc="best", fontsize=7)
-    drawn = [
-        np.asarray(line.get_xydata(), float)
-        for line in ax.lines
-        if line.get_linestyle() not in ("None", "none", " ", "") and len(line.get_xydata()) > 1
-    ]
+    drawn = drawn_lines(ax)
     center = np.nanmean(own.circuits[0].positions[first], axis=0) if own.circuits else np.zeros(2)
     place_notes(ax, notes, drawn, center)
     return fig
@@ -464,7 +462,7 @@ def plot_speed(
     """|dP/dθ| of a traced joint over the circuit, against the input (paper 002's velocity)."""
     joint = joint or mechanism.plan.traced[0]
     motion = circuit(mechanism, samples, order=1)
-    fig = ax.figure if ax is not None else new_figure((7, 3))
+    fig = figure_of(ax) if ax is not None else new_figure((7, 3))
     ax = ax or fig.add_subplot()
     speed = point_speed(motion, joint)
     # Near a limit position the speed per radian of input grows without bound: clip the axis

@@ -11,8 +11,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
+from matplotlib.artist import Artist
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.text import Text
@@ -24,11 +26,16 @@ __all__ = [
     "LEGEND_COLUMNS",
     "Note",
     "add_note",
+    "drawn_lines",
     "fit_figure",
     "legend_below",
     "legend_height",
     "place_notes",
 ]
+
+
+HAlign = Literal["left", "right", "center"]
+VAlign = Literal["bottom", "top", "center"]
 
 
 @dataclass
@@ -53,7 +60,7 @@ def add_note(notes: list[Note], xy: Array, text: str, color: str, tol: float) ->
 def _overlap(a: Bbox, b: Bbox) -> float:
     w = min(a.x1, b.x1) - max(a.x0, b.x0)
     h = min(a.y1, b.y1) - max(a.y0, b.y0)
-    return max(w, 0.0) * max(h, 0.0)
+    return float(max(w, 0.0) * max(h, 0.0))
 
 
 def _ink(segments: Array, box: Bbox) -> float:
@@ -77,6 +84,19 @@ def _ink(segments: Array, box: Bbox) -> float:
         t1 = np.where(~parallel & (p > 0.0), np.minimum(t1, r), t1)
     inside = keep & (t1 > t0)
     return float(np.sum((t1 - t0)[inside] * np.hypot(dx, dy)[inside]))
+
+
+def drawn_lines(ax: Axes) -> list[Array]:
+    """Every polyline of ``ax`` drawn as a line (markers alone left out), in data coordinates:
+    the ink that :func:`place_notes` keeps its notes off."""
+    out = []
+    for line in ax.lines:
+        if line.get_linestyle() in ("None", "none", " ", ""):
+            continue
+        xy = np.asarray(line.get_xydata(), float)
+        if len(xy) > 1:
+            out.append(xy)
+    return out
 
 
 def place_notes(ax: Axes, notes: Sequence[Note], lines: Sequence[Array], center: Array) -> None:
@@ -116,7 +136,7 @@ def place_notes(ax: Axes, notes: Sequence[Note], lines: Sequence[Array], center:
         away_angle = math.atan2(away[1], away[0]) if np.hypot(*away) > 0 else math.pi / 2
         ann = ax.annotate(
             "\n".join(note.lines),
-            xy=note.xy,
+            xy=(float(note.xy[0]), float(note.xy[1])),
             xytext=(0.0, 0.0),
             textcoords="offset points",
             fontsize=8.5,
@@ -129,13 +149,13 @@ def place_notes(ax: Axes, notes: Sequence[Note], lines: Sequence[Array], center:
         # Measure the text once (Text's own extent, without the leader line), then slide it.
         ext = Text.get_window_extent(ann, renderer)
         w, h = ext.width + 2.0 * pad, ext.height + 2.0 * pad
-        best: tuple[float, tuple[float, float], str, str, Bbox] | None = None
+        best: tuple[float, tuple[float, float], HAlign, VAlign, Bbox] | None = None
         for radius in (22.0, 34.0, 50.0, 70.0):
             for k in range(24):
                 ang = away_angle + 2.0 * math.pi * k / 24.0
                 off = (radius * math.cos(ang), radius * math.sin(ang))
-                ha = "left" if off[0] > 6 else ("right" if off[0] < -6 else "center")
-                va = "bottom" if off[1] > 6 else ("top" if off[1] < -6 else "center")
+                ha: HAlign = "left" if off[0] > 6 else ("right" if off[0] < -6 else "center")
+                va: VAlign = "bottom" if off[1] > 6 else ("top" if off[1] < -6 else "center")
                 ax_ = xy_disp[0] + off[0] * px_per_pt
                 ay_ = xy_disp[1] + off[1] * px_per_pt
                 x0 = {"left": ax_ - pad, "right": ax_ - w + pad, "center": ax_ - w / 2}[ha]
@@ -156,8 +176,8 @@ def place_notes(ax: Axes, notes: Sequence[Note], lines: Sequence[Array], center:
         assert best is not None
         _, off, ha, va, bb = best
         ann.xyann = off
-        ann.set_ha(ha)
-        ann.set_va(va)
+        ann.set_horizontalalignment(ha)
+        ann.set_verticalalignment(va)
         boxes.append(bb)
 
 
@@ -178,7 +198,7 @@ def legend_height(count: int) -> float:
     return 0.25 * math.ceil(count / LEGEND_COLUMNS) + 0.15 if count else 0.0
 
 
-def legend_below(fig: Figure, handles: Sequence, labels: Sequence[str]) -> None:
+def legend_below(fig: Figure, handles: Sequence[Artist], labels: Sequence[str]) -> None:
     """The figure's legend under the drawing, where it cannot hide a curve."""
     if handles:
         fig.legend(

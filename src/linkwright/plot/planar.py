@@ -24,16 +24,18 @@ from dataclasses import dataclass
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.typing import LineStyleType
 from numpy.typing import NDArray
 
 from linkwright.analysis import transmission_angle
 from linkwright.engine import Motion
 from linkwright.geometry import plane
 from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, circuits
-from linkwright.plot.axes import check_axes
+from linkwright.plot.axes import check_axes, figure_of
 from linkwright.plot.notes import (
     Note,
     add_note,
+    drawn_lines,
     fit_figure,
     legend_below,
     legend_height,
@@ -141,7 +143,8 @@ class TracedCircuit:
 
     def closed(self) -> NDArray[np.int64]:
         """Sample indices of the closed circuit: 0, 1, …, n − 1 and 0 again."""
-        return np.r_[np.arange(self.n), 0]
+        indices: NDArray[np.int64] = np.r_[np.arange(self.n), 0]
+        return indices
 
 
 def traced_circuits(mechanism: Mechanism, samples: int, order: int = 1) -> list[TracedCircuit]:
@@ -196,7 +199,8 @@ def plot_curves(
     Returns
     -------
     matplotlib.figure.Figure
-        The figure drawn on (``ax.figure`` when ``ax`` is given). One axes with equal aspect.
+        The figure drawn on (``ax``'s top-level figure when ``ax`` is given). One axes with
+        equal aspect.
         Curve lines carry the labels ``"assembly +1"`` and
         ``"assembly −1"`` (further circuits of the same mode ``"assembly ±1, circuit k"``); each
         is closed, its last point repeating its first.
@@ -217,9 +221,9 @@ def plot_curves(
     >>> np.hypot(*ends.get_xydata().T).round(9)
     array([6., 4.])
     """
-    require_single(mechanism)
+    mechanism = require_single(mechanism)
     own_figure = check_axes(ax) is None
-    fig = new_figure((8.5, 7.0)) if ax is None else ax.figure
+    fig = new_figure((8.5, 7.0)) if ax is None else figure_of(ax)
     ax = ax if ax is not None else fig.add_subplot()
     sign = float(np.sign(mechanism.assembly))
     mine = traced_circuits(mechanism, samples)
@@ -307,11 +311,7 @@ def plot_curves(
         ax.legend(*zip(*shown, strict=True), loc="best", fontsize=7)
 
     # Everything drawn as a line (curves, paths, links, guide) is what the notes must not hide.
-    lines = [
-        np.asarray(line.get_xydata(), float)
-        for line in ax.lines
-        if line.get_linestyle() not in ("None", "none", " ", "") and len(line.get_xydata()) > 1
-    ]
+    lines = drawn_lines(ax)
     lines += _link_lines(drawn)  # with the coupler plate's edges
     center = np.nanmean(mine[0].motion.positions["P"], axis=0) if mine else np.zeros(2)
     place_notes(ax, notes, lines, center)
@@ -391,6 +391,7 @@ def plot_diagrams(mechanism: Mechanism, *, samples: int = 720, title: str | None
             else [np.arange(c.upper + 1), np.arange(c.upper, c.n + 1)]
         )
         for j, leg in enumerate(legs):
+            ls: LineStyleType
             if c.full:
                 label, color, ls = "full turn" + circuit_name, CURVE_COLOR, "-"
             else:

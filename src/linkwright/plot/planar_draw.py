@@ -24,13 +24,15 @@ from linkwright.plot.style import (
     LIMIT_COLOR,
     LINK_COLOR,
     Array,
+    LineKw,
     deg_text,
 )
 
 __all__ = ["draw_linkage", "ground_symbol", "label_joints", "require_single"]
 
 
-def require_single(mechanism: Mechanism) -> None:
+def require_single(mechanism: Mechanism) -> FourBar | SliderCrank:
+    """``mechanism`` itself, if it is one linkage of a family that has a drawing."""
     if not isinstance(mechanism, FourBar | SliderCrank):
         raise TypeError(
             f"only FourBar and SliderCrank can be drawn, got {type(mechanism).__name__}"
@@ -39,23 +41,27 @@ def require_single(mechanism: Mechanism) -> None:
         raise ValueError(
             f"draw one linkage at a time; this mechanism has batch shape {mechanism.batch_shape}"
         )
+    return mechanism
 
 
-def _ground_points(mechanism: Mechanism) -> dict[str, Array]:
+def _ground_points(mechanism: FourBar | SliderCrank) -> dict[str, Array]:
     if isinstance(mechanism, FourBar):
-        return {"A0": np.asarray(mechanism.A0, float), "B0": np.asarray(mechanism.B0, float)}
-    return {"A0": np.asarray(mechanism.A0, float)}
+        return {
+            "A0": np.asarray(mechanism.A0, np.float64),
+            "B0": np.asarray(mechanism.B0, np.float64),
+        }
+    return {"A0": np.asarray(mechanism.A0, np.float64)}
 
 
-def _symbol_size(ax: Axes, mechanism: Mechanism, pose: Motion) -> float:
+def _symbol_size(ax: Axes, mechanism: FourBar | SliderCrank, pose: Motion) -> float:
     """Size of the ground symbols and slider block: a twentieth of the drawing's extent.
 
     The extent is that of what the axes already hold (e.g. coupler curves) joined with the
     linkage's own reach, so the symbols read the same at any zoom of the picture.
     """
-    pts = [p[0] for p in pose.positions.values() if np.all(np.isfinite(p[0]))]
-    pts += list(_ground_points(mechanism).values())
-    pts = np.array(pts)
+    placed = [p[0] for p in pose.positions.values() if np.all(np.isfinite(p[0]))]
+    placed += list(_ground_points(mechanism).values())
+    pts = np.array(placed)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     lim = ax.dataLim
     if np.all(np.isfinite([lim.x0, lim.x1, lim.y0, lim.y1])) and lim.width > 0:
@@ -209,7 +215,7 @@ def label_joints(
         text = texts.get(name) or {"A0": "$A_0$", "B0": "$B_0$"}.get(name, f"${name}$")
         ax.annotate(
             text,
-            xy=p,
+            xy=(float(p[0]), float(p[1])),
             xytext=(r * math.cos(bisector), r * math.sin(bisector)),
             textcoords="offset points",
             ha="center",
@@ -284,7 +290,7 @@ def draw_linkage(
     ValueError
         For a batch of mechanisms.
     """
-    require_single(mechanism)
+    mechanism = require_single(mechanism)
     theta = float(theta)
     pose = _pose(mechanism, theta, motion)
     ok = bool(pose.valid[0])
@@ -322,7 +328,7 @@ def draw_linkage(
 
     a, b, p = pts["A"], pts["B"], pts["P"]
     a0 = pts["A0"]
-    link = {"color": LINK_COLOR, "lw": 4.0, "solid_capstyle": "round", "zorder": 4}
+    link: LineKw = {"color": LINK_COLOR, "lw": 4.0, "solid_capstyle": "round", "zorder": 4}
     ax.plot([a0[0], a[0]], [a0[1], a[1]], **link)
     if isinstance(mechanism, FourBar):
         b0 = pts["B0"]
@@ -348,9 +354,9 @@ def draw_linkage(
 
     drawn = {k: pts[k] for k in mechanism.reported_joints}
     for name, q in drawn.items():
-        style = {"ms": 8, "mfc": "white", "mec": LINK_COLOR, "mew": 1.8, "zorder": 6}
+        style: LineKw = {"ms": 8, "mfc": "white", "mec": LINK_COLOR, "mew": 1.8, "zorder": 6}
         if name == "P":
-            style.update(mfc=CURVE_COLOR, mec="white", ms=8)
+            style["mfc"], style["mec"], style["ms"] = CURVE_COLOR, "white", 8
         # Labelled (hidden from the legend) so the drawn place can be read back.
         ax.plot(*q, "o", label=f"_joint {name}", **style)
     taken = _incident(drawn, mechanism)

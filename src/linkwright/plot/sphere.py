@@ -25,6 +25,7 @@ here as before).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -33,7 +34,7 @@ from numpy.typing import ArrayLike
 
 from linkwright.geometry import sphere
 from linkwright.mechanisms import Mechanism, solve
-from linkwright.plot.axes import check_axes
+from linkwright.plot.axes import check_axes, figure_of
 from linkwright.plot.features import Features, find_features, input_status, never_modes
 from linkwright.plot.generic import DEAD_COLOR, family_title
 from linkwright.plot.sphere_draw import (
@@ -141,7 +142,7 @@ def plot_spherical_curves(
     checked = [(str(label), check_curve(str(label), pts)) for label, pts in curves]
     everything = np.concatenate([p for _, p in checked]) if checked else np.zeros((0, 3))
     cam = resolve_view(view, up, mean_direction(everything, np.array([1.0, 0.0, 0.0])))
-    fig = ax.figure if ax is not None else new_figure((6, 6))
+    fig = figure_of(ax) if ax is not None else new_figure((6, 6))
     ax = ax or fig.add_subplot()
     if backdrop:
         draw_backdrop(ax, cam)
@@ -167,7 +168,7 @@ def plot_spherical_linkage(
     view: ArrayLike | None = None,
     up: ArrayLike | None = None,
     title: str | None = None,
-    extra_curves: list[tuple[str, ArrayLike]] | None = None,
+    extra_curves: Sequence[tuple[str, ArrayLike]] | None = None,
     ax: Axes | None = None,
     annotate: bool = False,
 ) -> Figure:
@@ -239,7 +240,7 @@ def plot_spherical_linkage(
     extra = [(str(label), check_curve(str(label), pts)) for label, pts in extra_curves or []]
     check_axes(ax)
     feats = find_features(mechanism, samples, every=annotate, marks=annotate)
-    fig = ax.figure if ax is not None else new_figure((6.4, 6.6))
+    fig = figure_of(ax) if ax is not None else new_figure((6.4, 6.6))
     ax = ax or fig.add_subplot()
     head = title or mechanism.family
     _, pose, theta = _sphere_panel(
@@ -406,7 +407,7 @@ def plot_spherical_mechanism(
     Returns
     -------
     matplotlib.figure.Figure
-        Two axes: the sphere, then the map; ``ax.figure`` when ``ax`` is given.
+        Two axes: the sphere, then the map; ``ax``'s (top-level) figure when ``ax`` is given.
 
     Raises
     ------

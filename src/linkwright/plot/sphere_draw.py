@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import itertools
 import math
+from typing import TypedDict
 
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.patches import Circle, Polygon
+from matplotlib.typing import ColorType, LineStyleType
 
 from linkwright.geometry import sphere
 from linkwright.mechanisms import Mechanism
@@ -44,6 +46,7 @@ from linkwright.plot.style import (
 
 __all__ = [
     "MARK_STYLES",
+    "CurveStyle",
     "draw_backdrop",
     "draw_frame",
     "draw_joint",
@@ -91,7 +94,15 @@ def draw_backdrop(ax: Axes, view: SphereView, avoid: Array | None = None) -> Non
 
 
 def stroke(
-    ax: Axes, view: SphereView, p: Array, *, color, lw: float, label=None, z=2.0, ls="-"
+    ax: Axes,
+    view: SphereView,
+    p: Array,
+    *,
+    color: ColorType,
+    lw: float,
+    label: str | None = None,
+    z: float = 2.0,
+    ls: LineStyleType = "-",
 ) -> None:
     """A polyline on the sphere: drawn ``ls`` where near, dashed and faded where far."""
     near, far = view.split(p)
@@ -107,20 +118,26 @@ MARK_STYLES = (
 )
 
 
-def styled_curves(
-    mechanism: Mechanism, feats: Features
-) -> list[tuple[dict[str, object], str, Array]]:
+class CurveStyle(TypedDict):
+    """How :func:`stroke` draws one path (its keyword arguments)."""
+
+    color: ColorType
+    lw: float
+    ls: LineStyleType
+
+
+def styled_curves(mechanism: Mechanism, feats: Features) -> list[tuple[CurveStyle, str, Array]]:
     """(line style, legend label, closed curve) of every drawn path, as the planar picture
     draws them: the document's mode bold, each other mode dashed in its colour, the other
     traced joints dotted grey on the document's mode."""
     traced = mechanism.plan.traced
-    out: list[tuple[dict[str, object], str, Array]] = []
+    out: list[tuple[CurveStyle, str, Array]] = []
     colors: dict[tuple[float, ...], str] = {}
     palette = iter(MODE_COLORS)
     several = len(feats.modes) > 1
     for mode, k, p, same in mode_curves(feats, traced[0]):
         if mode.own:
-            style: dict[str, object] = {"color": OWN_COLOR, "lw": 2.2, "ls": "-"}
+            style: CurveStyle = {"color": OWN_COLOR, "lw": 2.2, "ls": "-"}
         else:
             if mode.signs not in colors:
                 colors[mode.signs] = next(palette, "0.5")
@@ -159,8 +176,10 @@ def draw_frame(ax: Axes, cam: SphereView, ground: dict[str, Array]) -> None:
 def draw_pose(ax: Axes, cam: SphereView, mechanism: Mechanism, pose: dict[str, Array]) -> None:
     pairs, bodies = sphere_links(mechanism)
     for o, t, p in bodies:
-        edges = [safe_arc(pose[x], pose[y]) for x, y in ((o, t), (t, p), (p, o))]
-        if any(e is None for e in edges):
+        edges = [
+            e for x, y in ((o, t), (t, p), (p, o)) if (e := safe_arc(pose[x], pose[y])) is not None
+        ]
+        if len(edges) < 3:
             continue
         ring = np.concatenate(edges)
         centre = sphere.unit(pose[o] + pose[t] + pose[p])
@@ -201,9 +220,10 @@ def draw_joint(ax: Axes, cam: SphereView, name: str, p: Array, *, ground: bool) 
         zorder=7,
         label=f"_joint {name}",
     )
+    x, y = cam.xy(p)
     ax.annotate(
         name,
-        cam.xy(p),
+        (x, y),
         xytext=(5, 4),
         textcoords="offset points",
         fontsize=9,

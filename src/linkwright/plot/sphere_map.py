@@ -15,6 +15,7 @@ import math
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.patches import Polygon
+from numpy.typing import NDArray
 
 from linkwright.geometry import sphere
 from linkwright.geometry.sphere import lambert_azimuthal
@@ -25,7 +26,7 @@ from linkwright.plot.generic import (
     OWN_COLOR,
     joint_letter,
 )
-from linkwright.plot.notes import Note, add_note, place_notes
+from linkwright.plot.notes import Note, add_note, drawn_lines, place_notes
 from linkwright.plot.planar_draw import label_joints
 from linkwright.plot.sphere_draw import MARK_STYLES, styled_curves
 from linkwright.plot.sphere_view import (
@@ -40,7 +41,7 @@ from linkwright.plot.sphere_view import (
     safe_arc,
     sphere_links,
 )
-from linkwright.plot.style import LIMIT_COLOR, deg_text
+from linkwright.plot.style import LIMIT_COLOR, LineKw, TextKw, deg_text
 
 __all__ = ["map_panel"]
 
@@ -51,7 +52,9 @@ def _lat_lon(v: Array) -> tuple[float, float]:
     )
 
 
-def _graticule(ax: Axes, centre: Array, step: float, box: tuple[float, float, float, float]):
+def _graticule(
+    ax: Axes, centre: Array, step: float, box: tuple[float, float, float, float]
+) -> None:
     """Parallels and meridians about +Z every ``step`` degrees, labelled at the map's left and
     bottom edges; the far side (beyond 120° from the centre) is left out."""
     x0, x1, y0, y1 = box
@@ -63,11 +66,11 @@ def _graticule(ax: Axes, centre: Array, step: float, box: tuple[float, float, fl
         pts = np.where(far[:, None], np.nan, pts)
         return lambert_azimuthal(pts, centre)
 
-    def inside(xy: Array) -> Array:
+    def inside(xy: Array) -> NDArray[np.bool_]:
         return (xy[:, 0] > x0) & (xy[:, 0] < x1) & (xy[:, 1] > y0) & (xy[:, 1] < y1)
 
-    style = {"color": "0.82", "lw": 0.6, "zorder": 0.5}
-    text = {"fontsize": 7, "color": "0.5", "clip_on": True, "zorder": 0.6}
+    style: LineKw = {"color": "0.82", "lw": 0.6, "zorder": 0.5}
+    text: TextKw = {"fontsize": 7, "color": "0.5", "clip_on": True, "zorder": 0.6}
     for lat in np.arange(-90.0 + step, 90.0, step):
         r = math.radians(lat)
         xy = project(
@@ -81,7 +84,8 @@ def _graticule(ax: Axes, centre: Array, step: float, box: tuple[float, float, fl
             if xy[i, 1] < y0 + 0.08 * (y1 - y0):  # the corner belongs to the meridians' labels
                 continue
             label = f"lat {lat:.0f}°".replace("-", MINUS)
-            ax.text(*xy[i], label, ha="left", va="bottom", **text)
+            x, y = xy[i]
+            ax.text(x, y, label, ha="left", va="bottom", **text)
     for lon in np.arange(-180.0, 180.0, step):
         r = math.radians(lon)
         xy = project(np.stack((np.cos(v) * np.cos(r), np.cos(v) * np.sin(r), np.sin(v)), -1))
@@ -90,7 +94,8 @@ def _graticule(ax: Axes, centre: Array, step: float, box: tuple[float, float, fl
         if ok.any() and float(np.min(xy[ok, 1])) < y0 + 0.06 * (y1 - y0):
             i = int(np.flatnonzero(ok)[np.argmin(xy[ok, 1])])
             label = f"lon {lon:.0f}°".replace("-", MINUS)
-            ax.text(*xy[i], label, ha="left", va="bottom", rotation=90, **text)
+            x, y = xy[i]
+            ax.text(x, y, label, ha="left", va="bottom", rotation=90, **text)
 
 
 def _map_centre(
@@ -149,8 +154,8 @@ def map_panel(
         for m, q in zip(marks, xy, strict=True):
             add_note(notes, q, m.text, color, tol)
     dead = feats.of("dead")
-    if dead and feats.output is not None and feats.output[0] is not None:
-        pivot, out = feats.output
+    pivot, out = feats.output or (None, None)
+    if dead and pivot is not None and out is not None:
         for m in dead:
             e = safe_arc(m.pose[pivot], m.pose[out])
             if e is not None:
@@ -162,17 +167,21 @@ def map_panel(
             *ends.T, "s", ms=6, mfc="white", mec=DEAD_COLOR, mew=1.4, ls="none", zorder=3.55,
             label=f"output {pivot}{out} at its dead centres",
         )  # fmt: skip
-    for a, b in itertools.pairwise(ground.values()):
-        e = safe_arc(a, b)
+    for start, end in itertools.pairwise(ground.values()):
+        e = safe_arc(start, end)
         if e is not None:
             ax.plot(*project(e).T, color=GROUND, lw=3.5, solid_capstyle="round", zorder=1.8)
     pts: dict[str, Array] = dict(ground) if pose is None else dict(pose)
     pairs, bodies = sphere_links(mechanism)
     if pose is not None:
-        for o, t, p in bodies:
-            edges = [safe_arc(pose[x], pose[y]) for x, y in ((o, t), (t, p), (p, o))]
-            if all(e is not None for e in edges):
-                ring = project(np.concatenate(edges))  # type: ignore[arg-type]
+        for o, t, q in bodies:
+            edges = [
+                e
+                for x, y in ((o, t), (t, q), (q, o))
+                if (e := safe_arc(pose[x], pose[y])) is not None
+            ]
+            if len(edges) == 3:
+                ring = project(np.concatenate(edges))
                 ax.add_patch(
                     Polygon(ring, closed=True, facecolor=BODY, edgecolor="none", alpha=0.5)
                 )
@@ -190,19 +199,19 @@ def map_panel(
         if a in flat and b in flat:
             taken[a].append(flat[b] - flat[a])
             taken[b].append(flat[a] - flat[b])
-    ground = mechanism.plan.ground
+    fixed = mechanism.plan.ground
     for name in mechanism.plan.joints:
         if name not in flat:
             continue
-        is_ground = name in ground
-        style = (
+        is_ground = name in fixed
+        mark: LineKw = (
             {"marker": "^", "ms": 10, "mfc": GROUND, "mec": LINK, "mew": 1.0}
             if is_ground
             else {"marker": "o", "ms": 7, "mfc": "white", "mec": LINK, "mew": 1.6}
         )
         if name == traced and not is_ground:
-            style.update(mfc=OWN_COLOR, mec="white")
-        ax.plot(*flat[name], ls="none", zorder=6, label=f"_joint {name}", **style)
+            mark["mfc"], mark["mec"] = OWN_COLOR, "white"
+        ax.plot(*flat[name], ls="none", zorder=6, label=f"_joint {name}", **mark)
     label_joints(ax, flat, taken, {n: joint_letter(n) for n in flat})
     every = np.concatenate([*drawn, *(q[None] for q in flat.values())])
     every = every[np.all(np.isfinite(every), axis=-1)]
@@ -224,11 +233,7 @@ def map_panel(
         f"(lat {deg_text(lat)}°, lon {deg_text(lon)}°); graticule every {step:.0f}° about +Z",
         fontsize=9.5,
     )
-    lines = [
-        np.asarray(line.get_xydata(), float)
-        for line in ax.lines
-        if line.get_linestyle() not in ("None", "none", " ", "") and len(line.get_xydata()) > 1
-    ]
+    lines = drawn_lines(ax)
     centre_xy = np.nanmean(drawn[0], axis=0) if drawn else np.zeros(2)
     place_notes(ax, notes, lines, centre_xy)
     return centre

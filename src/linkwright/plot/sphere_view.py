@@ -149,7 +149,9 @@ def great_arc(a: ArrayLike, b: ArrayLike, samples: int = 48) -> Array:
     t = np.where(same[..., None], 0.0, t)
     k = np.linspace(0.0, 1.0, samples)
     angle = omega[..., None] * k  # (..., samples)
-    out = np.cos(angle)[..., None] * a[..., None, :] + np.sin(angle)[..., None] * t[..., None, :]
+    out: Array = (
+        np.cos(angle)[..., None] * a[..., None, :] + np.sin(angle)[..., None] * t[..., None, :]
+    )
     out[..., 0, :] = a
     out[..., -1, :] = b
     return out
@@ -396,10 +398,12 @@ def _best_view(ground: Array, moving: Array, preferred: Array) -> Array:
     candidates = np.concatenate((candidates, preferred[None]))
 
     def score(points: Array) -> Array:
-        return np.minimum(candidates @ points.T, 0.35).mean(axis=1)
+        capped: Array = np.minimum(candidates @ points.T, 0.35).mean(axis=1)
+        return capped
 
     total = score(ground) + score(moving) + 0.02 * (candidates @ preferred)
-    return candidates[int(np.argmax(total))]
+    best: Array = candidates[int(np.argmax(total))]
+    return best
 
 
 def fit_normal(ground: Array, g: Array) -> Array:
@@ -409,7 +413,7 @@ def fit_normal(ground: Array, g: Array) -> Array:
         _, s, vt = np.linalg.svd(ground)
         # Two or more pivots spread along one great circle: its normal is the weakest direction.
         if s[1] > 1e-9 * s[0]:
-            n = vt[-1]
+            n: Array = vt[-1]
             n = n - (n @ g) * g
             if sphere.norm(n) > 1e-9:
                 return n / sphere.norm(n)

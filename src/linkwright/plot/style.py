@@ -11,10 +11,12 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
+from typing import TypedDict
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.typing import CapStyleType, ColorType, LineStyleType
 from numpy.typing import NDArray
 
 from linkwright.mechanisms import Mechanism
@@ -30,6 +32,8 @@ __all__ = [
     "MINUS",
     "MIXED_NOTE_COLOR",
     "OTHER_COLOR",
+    "LineKw",
+    "TextKw",
     "deg_text",
     "family_name",
     "new_figure",
@@ -67,6 +71,32 @@ GROUND_COLOR = "0.35"
 
 
 MIXED_NOTE_COLOR = "0.2"
+
+
+class LineKw(TypedDict, total=False):
+    """Keyword arguments of :meth:`matplotlib.axes.Axes.plot` that a picture's styles set,
+    kept as a TypedDict so that a style passed as ``**style`` is checked key by key."""
+
+    color: ColorType
+    lw: float
+    ls: LineStyleType
+    zorder: float
+    marker: str
+    ms: float
+    mfc: ColorType
+    mec: ColorType
+    mew: float
+    alpha: float
+    solid_capstyle: CapStyleType
+
+
+class TextKw(TypedDict, total=False):
+    """Keyword arguments of :meth:`matplotlib.axes.Axes.text` that a picture's styles set."""
+
+    fontsize: float
+    color: ColorType
+    clip_on: bool
+    zorder: float
 
 
 def new_figure(figsize: tuple[float, float]) -> Figure:
@@ -142,6 +172,8 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], *, dpi: float | None 
             f"save_figure writes .png, .svg or .pdf, not {path.suffix or 'no extension'!r}"
         )
     path.parent.mkdir(parents=True, exist_ok=True)
-    kwargs = {"dpi": 150 if dpi is None else dpi} if suffix == ".png" else {}
-    fig.savefig(path, format=suffix[1:], **kwargs)
+    if suffix == ".png":
+        fig.savefig(path, format="png", dpi=150 if dpi is None else dpi)
+    else:
+        fig.savefig(path, format=suffix[1:])
     return path

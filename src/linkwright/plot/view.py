@@ -136,7 +136,8 @@ def plot_mechanism(
     -------
     matplotlib.figure.Figure
         One axes for a planar linkage; two for a spherical one (the sphere, then the map);
-        ``ax.figure`` when ``ax`` is given.
+        ``ax``'s figure when ``ax`` is given (the top-level one, where ``ax`` is in a
+        subfigure).
 
     Raises
     ------

@@ -139,6 +139,8 @@ class SceneRequest(BaseModel):
     samples: int = Field(360, ge=limits.SAMPLES.least, le=limits.SAMPLES.value, strict=True)
     at: float | None = Field(None, allow_inf_nan=False)
     diagrams: bool = True
+    overlays: bool = False
+    summary: bool = False
 
 
 class DragRequest(BaseModel):
@@ -364,7 +366,12 @@ def create_app(
     )
     def scene_route(body: SceneRequest) -> Response:
         result = scene.scene(
-            body.document, samples=body.samples, at=body.at, diagrams=body.diagrams
+            body.document,
+            samples=body.samples,
+            at=body.at,
+            diagrams=body.diagrams,
+            overlays=body.overlays,
+            summary=body.summary,
         )
         return Response(scene.to_json(result), media_type="application/json")
 

@@ -120,7 +120,9 @@ def _fewer_samples(estimate: cost.Estimate, samples: int) -> str:
     (the circuits' count, whose limit searches do not shrink with the samples)."""
     share = max(estimate.work / cost.REQUEST.work.value, estimate.bytes / cost.REQUEST.bytes.value)
     fewer = int(samples / share)
-    if fewer >= SAMPLES.least:
+    least = SAMPLES.least
+    assert least is not None  # limits.py gives the samples a least value
+    if fewer >= least:
         return f"lower samples to about {fewer:,} or fewer"
     return "lower the gear ratio (it sets how many circuits there are) or simplify the linkage"
 
@@ -142,7 +144,7 @@ def scene_part(
     count = circuit_count(arcs)
     full = bool(arcs.full)
     part = cost.trace(shape, samples, circuits=max(count, 1), full=full)
-    numbers = count * samples * shape.joints * shape.dim * (2 if shape.dim == 3 else 1)
+    numbers: float = count * samples * shape.joints * shape.dim * (2 if shape.dim == 3 else 1)
     if diagrams and count:
         part = part + cost.trace(shape, samples, circuits=count, full=full, order=2)
         numbers += 12.0 * count * samples  # three diagrams of about a dozen series a circuit
@@ -207,7 +209,9 @@ def _study_advice(mechanism: Mechanism, arcs: InputArcs, steps: int, samples: in
     most = cost.largest(by_count, scope, 0, steps)
     if most is not None and most < steps - 1:
         options.append(f"count to {most} or fewer")
-    fewer = cost.largest(by_samples, scope, SAMPLES.least, samples)
+    least = SAMPLES.least
+    assert least is not None  # limits.py gives the samples a least value
+    fewer = cost.largest(by_samples, scope, least, samples)
     if fewer is not None and fewer < samples:
         options.append(f"samples to {fewer:,} or fewer")
     if circuit_count(arcs) > 1 and float(np.max(np.abs(getattr(mechanism, "ratio", 1.0)))) != 1:

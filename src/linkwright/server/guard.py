@@ -90,7 +90,7 @@ class Guard:
             await self.app(scope, receive, send)
             return
         headers = Headers(scope=scope)
-        refusal = self._refuse_headers(scope, headers)
+        refusal: Response | None = self._refuse_headers(scope, headers)
         if refusal is None and self.token is not None:
             refusal = _check_token(scope, headers, self.token)
         if refusal is not None:

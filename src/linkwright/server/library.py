@@ -205,7 +205,9 @@ class Library:
 
     @staticmethod
     def _row(conn: sqlite3.Connection, entry_id: int) -> sqlite3.Row:
-        row = conn.execute("SELECT * FROM entries WHERE id = ?", (entry_id,)).fetchone()
+        row: sqlite3.Row | None = conn.execute(
+            "SELECT * FROM entries WHERE id = ?", (entry_id,)
+        ).fetchone()
         if row is None:
             raise LibraryNotFound(f"library: no entry with id {entry_id}")
         return row

@@ -98,12 +98,12 @@ def check_name(name: Any, field: str = "name") -> str:
     """The stored form of a name: NFC (so names that look the same are the same), stripped."""
     if not isinstance(name, str):
         raise LibraryError(f"{field}: must be a string, got {type(name).__name__}")
-    name = unicodedata.normalize("NFC", name).strip()
-    if not name:
+    text = unicodedata.normalize("NFC", name).strip()
+    if not text:
         raise LibraryError(f"{field}: must not be empty")
-    if len(name) > MAX_NAME:
-        raise LibraryError(f"{field}: {len(name)} characters, at most {MAX_NAME} allowed")
-    for ch in name:
+    if len(text) > MAX_NAME:
+        raise LibraryError(f"{field}: {len(text)} characters, at most {MAX_NAME} allowed")
+    for ch in text:
         if unicodedata.category(ch) in _REFUSED_CATEGORIES:
             raise LibraryError(
                 f"{field}: contains U+{ord(ch):04X} (a control character or line break)"
@@ -113,9 +113,9 @@ def check_name(name: Any, field: str = "name") -> str:
                 f"{field}: contains U+{ord(ch):04X} (a bidirectional control, which can make a "
                 "name read differently from what it is)"
             )
-    if all(_invisible(ch) for ch in name):
+    if all(_invisible(ch) for ch in text):
         raise LibraryError(f"{field}: shows nothing (only zero-width or format characters)")
-    return name
+    return text
 
 
 def _invisible(ch: str) -> bool:

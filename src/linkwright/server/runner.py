@@ -115,7 +115,7 @@ class GuardedH11(H11Protocol):
             return None
         return self._bytes / max(age, 1.0), -age
 
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:  # type: ignore[override]
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
         super().connection_made(transport)  # type: ignore[arg-type]
         # Connections being closed are still in the set until their loss is seen: not counted.
         live = sum(1 for c in self.connections if not isinstance(c, GuardedH11) or c._open())
@@ -235,7 +235,11 @@ def make_server(app: Any, host: str, port: int, *, log_level: str = "warning") -
     bound = connection_bound(GuardedH11.max_connections)
     protocol = GuardedH11
     if bound != GuardedH11.max_connections:
-        protocol = type("GuardedH11", (GuardedH11,), {"max_connections": bound})
+        # A subclass, not GuardedH11 itself changed: the lower bound is this server's alone.
+        class BoundedH11(GuardedH11):
+            max_connections = bound
+
+        protocol = BoundedH11
     config = uvicorn.Config(
         app,
         host=host,

@@ -12,6 +12,7 @@ takes milliseconds whatever it holds.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 __all__ = ["json_depth"]
 
@@ -21,7 +22,7 @@ _STEP[[ord("["), ord("{")]] = 1
 _STEP[[ord("]"), ord("}")]] = -1
 
 
-def _escaped(codes: np.ndarray, quotes: np.ndarray) -> np.ndarray:
+def _escaped(codes: np.ndarray, quotes: np.ndarray) -> NDArray[np.bool_]:
     """Whether each quote at the positions ``quotes`` follows an odd run of backslashes."""
     slashes = np.flatnonzero(codes == _BACKSLASH)
     if slashes.size == 0:
@@ -35,7 +36,8 @@ def _escaped(codes: np.ndarray, quotes: np.ndarray) -> np.ndarray:
     found = k < ends.size
     k = np.minimum(k, ends.size - 1)
     after_run = found & (ends[k] == quotes - 1)
-    return after_run & ((ends[k] - starts[k] + 1) % 2 == 1)
+    odd: NDArray[np.bool_] = after_run & ((ends[k] - starts[k] + 1) % 2 == 1)
+    return odd
 
 
 def json_depth(body: bytes) -> int:

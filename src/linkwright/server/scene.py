@@ -47,6 +47,8 @@ from linkwright.plot.diagrams import DiagramError, diagram_series
 from linkwright.plot.view import range_text
 from linkwright.server import budget
 from linkwright.server.limits import SAMPLES, check_document
+from linkwright.server.overlays import estimate as overlay_cost
+from linkwright.server.overlays import motion_json, summary_json
 
 __all__ = [
     "DIAGRAM_KINDS",
@@ -425,7 +427,7 @@ def _share_searches(mechanisms: list[Mechanism], samples: int | None) -> None:
 
 
 def _planned(
-    doc: Document, samples: int, diagrams: bool
+    doc: Document, samples: int, diagrams: bool, overlays: bool = False, summary: bool = False
 ) -> list[tuple[str, dict[str, int], Document, bool, InputArcs]]:
     """Each assembly mode to draw with its input's arcs, once the whole scene's estimated cost
     (every circuit of every mode, the diagrams, the answer) is known to fit a request's budget
@@ -437,6 +439,11 @@ def _planned(
     _share_searches([variant.mechanism for _, _, variant, _ in variants], None)
     for label, signs, variant, own in variants:
         arcs, part, answer = budget.scene_part(variant.mechanism, samples, own and diagrams)
+        if own and (overlays or summary):
+            more, extra = overlay_cost(
+                variant.mechanism, arcs, samples, overlays=overlays, summary=summary
+            )
+            part, answer = part + more, answer + extra
         estimate = part if estimate is None else estimate + part
         numbers += answer
         out.append((label, signs, variant, own, arcs))
@@ -507,10 +514,18 @@ def _diagrams(mechanism: Mechanism, samples: int) -> tuple[dict[str, Any] | None
 
 
 def scene(
-    document: Any, *, samples: int = 360, at: float | None = None, diagrams: bool = True
+    document: Any,
+    *,
+    samples: int = 360,
+    at: float | None = None,
+    diagrams: bool = True,
+    overlays: bool = False,
+    summary: bool = False,
 ) -> dict[str, Any]:
     """Everything the page draws of one document (the module docstring; the contract in the
-    server's docs lists every key).
+    server's docs lists every key). ``overlays`` adds the joints' velocities and accelerations
+    and the instant centres along the own mode's circuits, ``summary`` the analysis summary
+    (:mod:`linkwright.server.overlays`); neither is computed unless asked.
 
     Raises
     ------
@@ -548,10 +563,20 @@ times per input turn; circuits can be traced up to 64 (the limit search samples 
 turn); lower the ratio to 64 or less
     """
     with budget.request("samples"):
-        return _scene(document, samples=samples, at=at, diagrams=diagrams)
+        return _scene(
+            document, samples=samples, at=at, diagrams=diagrams, overlays=overlays, summary=summary
+        )
 
 
-def _scene(document: Any, *, samples: int, at: float | None, diagrams: bool) -> dict[str, Any]:
+def _scene(
+    document: Any,
+    *,
+    samples: int,
+    at: float | None,
+    diagrams: bool,
+    overlays: bool = False,
+    summary: bool = False,
+) -> dict[str, Any]:
     started = time.perf_counter()
     low, high = SAMPLES.least, SAMPLES.value
     if isinstance(samples, bool) or not isinstance(samples, int) or not low <= samples <= high:
@@ -577,7 +602,7 @@ def _scene(document: Any, *, samples: int, at: float | None, diagrams: bool) -> 
     message = None
     traced_variants: list[tuple[str, dict[str, int], bool, Any, list[Any]]] = []
     try:
-        planned = _planned(doc, samples, diagrams)
+        planned = _planned(doc, samples, diagrams, overlays, summary)
         _share_searches([variant.mechanism for _, _, variant, _, _ in planned], samples)
         for label, signs, variant, own, arcs in planned:
             if variant.mechanism.plan.triads:
@@ -678,6 +703,12 @@ def _scene(document: Any, *, samples: int, at: float | None, diagrams: bool) -> 
         "diagrams": diagram_json,
         "message": message,
     }
+    # The velocities, centres and analysis summary (server/overlays.py), only where asked.
+    own_motions = next((ms for _, _, own, _, ms in traced_variants if own), [])
+    if overlays:
+        result["overlays"] = motion_json(mech, own_motions, pose_at) if own_motions else None
+    if summary:
+        result["summary"] = summary_json(mech)
     result["compute_ms"] = round(1e3 * (time.perf_counter() - started), 3)
     return result
 

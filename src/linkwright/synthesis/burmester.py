@@ -42,6 +42,7 @@ Soh, *Geometric Design of Linkages*, 2nd ed. (Springer 2011), ch. 5.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from itertools import combinations, permutations
 
@@ -86,9 +87,10 @@ NEWTON_STEPS = 6
 RADIUS_TOL = 1e-10
 
 
-def _normalised(points: Array, angles: Array, scale: Array):
+def _normalised(points: Array, angles: Array, scale: Array) -> tuple[CArray, Array]:
     """δj (complex, pose 1 at the origin, in units of the spread) and αj − α1."""
-    z = (points[..., 0] + 1j * points[..., 1]) / scale[..., None]
+    # asarray: the stubs read float + 1j·float as float; the sum is complex128 already.
+    z = np.asarray(points[..., 0] + 1j * points[..., 1], dtype=np.complex128) / scale[..., None]
     return z - z[..., :1], angles - angles[..., :1]
 
 
@@ -267,7 +269,7 @@ def _turn_equation(x: Array, d: CArray, alpha: Array, beta: Array) -> tuple[Arra
     return F, np.concatenate((-ke2 - kte1, ke2 + r2t), -1)
 
 
-def _system(x, d, alpha, beta):
+def _system(x: Array, d: CArray, alpha: Array, beta: Array | None) -> tuple[Array, Array]:
     F, J = _equations(x, d, alpha)
     if beta is None:
         return F, J
@@ -295,7 +297,7 @@ def _newton(x: Array, d: CArray, alpha: Array, beta: Array | None, steps: int) -
     AL = np.broadcast_to(alpha, shape + (m,)).reshape(-1, m)
     BE = None if beta is None else np.broadcast_to(beta, shape).reshape(-1)
 
-    def system(idx, xs):
+    def system(idx: NDArray[np.intp], xs: Array) -> tuple[Array, Array]:
         return _system(xs, D[idx], AL[idx], None if BE is None else BE[idx])
 
     everyone = np.arange(len(X))
@@ -336,7 +338,8 @@ def _radius_error(x: Array, d: CArray, alpha: Array) -> Array:
     g = x[..., None, :2]
     r1 = np.hypot(*np.moveaxis(x[..., 2:] - x[..., :2], -1, 0))
     rj = np.hypot(*np.moveaxis(_moved(x, d, alpha) - g, -1, 0))
-    return np.max(np.abs(rj - r1[..., None]), -1) / np.maximum(r1, 1.0)
+    error: Array = np.max(np.abs(rj - r1[..., None]), -1) / np.maximum(r1, 1.0)
+    return error
 
 
 def _turn_error(x: Array, d: CArray, alpha: Array, beta: Array) -> Array:
@@ -344,7 +347,8 @@ def _turn_error(x: Array, d: CArray, alpha: Array, beta: Array) -> Array:
     e1 = x[..., 2:] - x[..., :2]
     e2 = _moved(x, d[..., :1], alpha[..., :1])[..., 0, :] - x[..., :2]
     turn = np.arctan2(e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0], np.sum(e1 * e2, -1))
-    return np.abs(np.angle(np.exp(1j * (turn - beta))))
+    off: Array = np.abs(np.angle(np.exp(1j * (turn - beta))))
+    return off
 
 
 @dataclass(frozen=True)
@@ -485,7 +489,9 @@ def _padd(*ps: CArray) -> CArray:
     return out
 
 
-def _quadratic_in_v(d1, d2, d3, dk):
+def _quadratic_in_v(
+    d1: CArray, d2: CArray, d3: CArray, dk: CArray
+) -> tuple[CArray, CArray, CArray]:
     """(a2, a1, a0/u) of |Δ1 + Δ2u + Δ3v|² = |Δk|² times uv, as polynomials in u (ascending)."""
     c = np.conj
     a2 = np.array([d3 * c(d2), d3 * c(d1)])
@@ -497,7 +503,7 @@ def _quadratic_in_v(d1, d2, d3, dk):
     return a2, a1, a0
 
 
-def _deflate(p: CArray, roots) -> CArray:
+def _deflate(p: CArray, roots: Iterable[complex]) -> CArray:
     """p (ascending coefficients) divided by (u − r) for each known root r."""
     for r in roots:
         high = p[::-1]
@@ -532,7 +538,7 @@ def _unit_roots(p: CArray) -> list[float]:
         return sorted(float(np.angle(r)) for r in roots if abs(abs(r) - 1) < 1e-7)
     c = p[k] / np.conj(p[n - k])
 
-    def f(beta):
+    def f(beta: ArrayLike) -> Array:
         u = np.exp(1j * np.asarray(beta))
         return np.real(np.polyval(p[::-1], u) * np.exp(-0.5j * n * np.asarray(beta)) / np.sqrt(c))
 
@@ -568,7 +574,7 @@ def _unit_roots(p: CArray) -> list[float]:
     return out
 
 
-def _burmester_one(delta: CArray, alpha: Array):
+def _burmester_one(delta: CArray, alpha: Array) -> list[tuple[Array, float, float]] | None:
     """Real Burmester pairs (g, c) of one normalised pose set (complex arrays), residuals."""
     cof4 = _cofactors(delta, alpha, 3)
     cof5 = _cofactors(delta, alpha, 4)
@@ -642,7 +648,8 @@ class BurmesterPoints:
     def count(self) -> NDArray[np.int64]:
         """How many real Burmester points (batch shape): 0, 2 or 4, or 1 or 3 where two of them
         coincide (a double point, counted once)."""
-        return np.sum(self.real, axis=-1)
+        count: NDArray[np.int64] = np.sum(self.real, axis=-1)
+        return count
 
 
 def burmester_points(points: ArrayLike, angles: ArrayLike) -> BurmesterPoints:
@@ -701,7 +708,9 @@ def burmester_points(points: ArrayLike, angles: ArrayLike) -> BurmesterPoints:
     return BurmesterPoints(centres=centres, circles=circles, real=real, residual=residual)
 
 
-def burmester_fourbars(points: ArrayLike, angles: ArrayLike) -> tuple[MotionDesign, NDArray]:
+def burmester_fourbars(
+    points: ArrayLike, angles: ArrayLike
+) -> tuple[MotionDesign, NDArray[np.int64]]:
     """Every four-bar made of two real Burmester points of five poses.
 
     Parameters

@@ -565,11 +565,11 @@ def fit_ellipse(points: ArrayLike) -> EllipseFit:
             "RMS radius), not an ellipse"
         )
     trammel = Trammel(
-        X0=np.float64(mean[0] + scale * unit.X0),
-        Y0=np.float64(mean[1] + scale * unit.Y0),
-        beta=np.float64(unit.beta),
-        a=np.float64(scale * unit.a),
-        b=np.float64(scale * unit.b),
+        X0=np.asarray(mean[0] + scale * unit.X0, dtype=np.float64),
+        Y0=np.asarray(mean[1] + scale * unit.Y0, dtype=np.float64),
+        beta=np.asarray(unit.beta, dtype=np.float64),
+        a=np.asarray(scale * unit.a, dtype=np.float64),
+        b=np.asarray(scale * unit.b, dtype=np.float64),
     )
     dist = ellipse_distance(p, trammel.center, trammel.a, trammel.b, trammel.beta)
     return EllipseFit(
@@ -680,6 +680,7 @@ def ellipse_synthesis(
         t = fit.trammel
         coeffs = fit.coeffs
     else:
+        assert conic is not None  # exactly one of the two is given (checked above)
         c = _conic_array(conic)
         if c.ndim != 1:
             raise EllipseError(f"give one conic (six coefficients), got shape {c.shape}")

@@ -217,27 +217,35 @@ def chebyshev_spacing(start: ArrayLike, end: ArrayLike, n: int = 3) -> Array:
             f"empty{batch_place(at)}"
         )
     j = np.arange(1, int(n) + 1)
-    return (s + e)[..., None] / 2 - (e - s)[..., None] / 2 * np.cos((2 * j - 1) * np.pi / (2 * n))
+    nodes: Array = (s + e)[..., None] / 2 - (e - s)[..., None] / 2 * np.cos(
+        (2 * j - 1) * np.pi / (2 * n)
+    )
+    return nodes
 
 
 def _linear_map(value: Array, lo: Array, hi: Array, to_lo: Array, to_hi: Array) -> Array:
     return to_lo + (value - lo) / (hi - lo) * (to_hi - to_lo)
 
 
-def _ranges(f, x_range, phi_range, psi_range, what):
-    x_range, phi_range, psi_range = (
-        np.asarray(r, dtype=float) for r in (x_range, phi_range, psi_range)
-    )
-    for name, r in (("x_range", x_range), ("phi_range", phi_range), ("psi_range", psi_range)):
+def _ranges(
+    f: Callable[[Array], ArrayLike],
+    x_range: ArrayLike,
+    phi_range: ArrayLike,
+    psi_range: ArrayLike,
+    what: str,
+) -> tuple[Array, Array, Array, Array, Array, Array]:
+    """x0, x1, f(x0), f(x1) and the (…, 2) angle ranges, checked to span ranges."""
+    xs, phis, psis = (np.asarray(r, dtype=float) for r in (x_range, phi_range, psi_range))
+    for name, r in (("x_range", xs), ("phi_range", phis), ("psi_range", psis)):
         if r.shape[-1:] != (2,):
             raise PrecisionError(f"{what}: {name} must be (start, end) pairs, got shape {r.shape}")
-    x0, x1 = x_range[..., 0], x_range[..., 1]
+    x0, x1 = xs[..., 0], xs[..., 1]
     y0, y1 = np.asarray(f(x0), dtype=float), np.asarray(f(x1), dtype=float)
     for name, lo, hi in (
         ("x_range", x0, x1),
         ("f(x_range)", y0, y1),
-        ("phi_range", phi_range[..., 0], phi_range[..., 1]),
-        ("psi_range", psi_range[..., 0], psi_range[..., 1]),
+        ("phi_range", phis[..., 0], phis[..., 1]),
+        ("psi_range", psis[..., 0], psis[..., 1]),
     ):
         at = first_true(
             np.broadcast_to(~np.isfinite(lo) | ~np.isfinite(hi) | (lo == hi), np.shape(lo))
@@ -247,7 +255,7 @@ def _ranges(f, x_range, phi_range, psi_range, what):
                 f"{what}: {name} must span a range, got [{float(np.asarray(lo)[at])}, "
                 f"{float(np.asarray(hi)[at])}]{batch_place(at)}"
             )
-    return x0, x1, y0, y1, phi_range, psi_range
+    return x0, x1, y0, y1, phis, psis
 
 
 def function_pairs(
@@ -287,13 +295,13 @@ def function_pairs(
      array([ 68.41887 , 112.646625, 145.576601]))
     """
     what = "function_pairs"
-    x0, x1, y0, y1, phi_range, psi_range = _ranges(f, x_range, phi_range, psi_range, what)
+    x0, x1, y0, y1, phis, psis = _ranges(f, x_range, phi_range, psi_range, what)
     x = chebyshev_spacing(x0, x1, n)
     y = np.asarray(f(x), dtype=float)
     if not np.all(np.isfinite(y)):
         raise PrecisionError(f"{what}: f is not finite at the precision points x = {x.tolist()}")
-    phi = _linear_map(x, x0[..., None], x1[..., None], phi_range[..., :1], phi_range[..., 1:])
-    psi = _linear_map(y, y0[..., None], y1[..., None], psi_range[..., :1], psi_range[..., 1:])
+    phi = _linear_map(x, x0[..., None], x1[..., None], phis[..., :1], phis[..., 1:])
+    psi = _linear_map(y, y0[..., None], y1[..., None], psis[..., :1], psis[..., 1:])
     return x, phi, psi
 
 
@@ -335,17 +343,17 @@ def function_error(
     (array([-1., -1.,  1.]), True)
     """
     what = "function_error"
-    x0, x1, y0, y1, phi_range, psi_range = _ranges(f, x_range, phi_range, psi_range, what)
+    x0, x1, y0, y1, phis, psis = _ranges(f, x_range, phi_range, psi_range, what)
     t = np.linspace(0.0, 1.0, int(samples))
     x = x0[..., None] + (x1 - x0)[..., None] * t
-    phi = _linear_map(x, x0[..., None], x1[..., None], phi_range[..., :1], phi_range[..., 1:])
+    phi = _linear_map(x, x0[..., None], x1[..., None], phis[..., :1], phis[..., 1:])
     y = np.asarray(f(x), dtype=float)
-    psi = _linear_map(y, y0[..., None], y1[..., None], psi_range[..., :1], psi_range[..., 1:])
+    psi = _linear_map(y, y0[..., None], y1[..., None], psis[..., :1], psis[..., 1:])
     mech = design.mechanism
     theta = phi + np.asarray(design.crank_offset)[..., None]
     motion = evaluate(mech.plan, mech.params(), theta, points=mech.points, order=0)
     rel = motion.positions["B"] - motion.positions["B0"]
     out = np.arctan2(rel[..., 1], rel[..., 0]) - np.asarray(design.rocker_offset)[..., None]
     # The angle error, turned into y by the linear map's slope.
-    slope = (y1 - y0)[..., None] / (psi_range[..., 1:] - psi_range[..., :1])
+    slope = (y1 - y0)[..., None] / (psis[..., 1:] - psis[..., :1])
     return x, wrap_angle(out - psi) * slope

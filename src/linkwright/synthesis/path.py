@@ -69,7 +69,15 @@ from scipy.optimize import minimize_scalar
 
 from linkwright.analysis.general import dyad_transmission_angles
 from linkwright.analysis.planar import fourbar_class, slidercrank_class, transmission_extremes
-from linkwright.mechanisms import Mechanism, circuit, input_range, solve
+from linkwright.mechanisms import (
+    FourBar,
+    Mechanism,
+    SliderCrank,
+    SphericalFourBar,
+    circuit,
+    input_range,
+    solve,
+)
 from linkwright.synthesis.path_families import Model
 from linkwright.synthesis.path_models import GenericModel, ModelError, model_for
 from linkwright.synthesis.path_problem import Candidate, Problem
@@ -123,7 +131,7 @@ __all__ = [
 # ------------------------------------------------------------------------------------------
 
 
-def _targets(model: Model, points: ArrayLike) -> Array:
+def _targets(model: Model | GenericModel, points: ArrayLike) -> Array:
     try:
         pts = np.array(points, dtype=float)
     except (TypeError, ValueError):
@@ -159,7 +167,7 @@ def _diameter(pts: Array) -> float:
 
 
 def _bounds(
-    model: Model, given: Mapping[str, Any] | None, size: float, centre: Array
+    model: Model | GenericModel, given: Mapping[str, Any] | None, size: float, centre: Array
 ) -> dict[str, tuple[float, float]]:
     out = model.default_bounds(size, centre)
     if not given:
@@ -186,7 +194,9 @@ def _bounds(
     return out
 
 
-def _checked_bound(model: Model, name: str, lo: float, hi: float, size: float):
+def _checked_bound(
+    model: Model | GenericModel, name: str, lo: float, hi: float, size: float
+) -> tuple[float, float]:
     if name in model.lengths:
         if model.space == "sphere":
             if lo >= np.pi or hi <= 0:
@@ -209,7 +219,9 @@ def _checked_bound(model: Model, name: str, lo: float, hi: float, size: float):
     return (lo, hi)
 
 
-def _constraints(model: Model, given: PathConstraints | Mapping[str, Any] | None):
+def _constraints(
+    model: Model | GenericModel, given: PathConstraints | Mapping[str, Any] | None
+) -> PathConstraints:
     if given is None:
         return PathConstraints()
     if isinstance(given, Mapping):
@@ -278,7 +290,12 @@ def _verify(p: Problem, cand: Candidate) -> tuple[dict[str, Any] | None, str]:
             return None, "the free timing is not monotonic within one turn"
     c = p.cons
     if c.classes:
-        name = str(slidercrank_class(named) if m.family == "slidercrank" else fourbar_class(named))
+        if isinstance(named, SliderCrank):
+            name = str(slidercrank_class(named))
+        else:
+            # Only the four-bars and the slider-crank have classes (checked with the bounds).
+            assert isinstance(named, FourBar | SphericalFourBar)
+            name = str(fourbar_class(named))
         if name not in c.classes:
             return None, f"its class is {name}, not one of {list(c.classes)}"
     if p.full_turn and not full:
@@ -324,7 +341,7 @@ def _reproject(p: Problem, mech: Mechanism, psi: float, rel: Array) -> Array:
             continue
         step = dense[1] - dense[0]
 
-        def d2(x, t=t):
+        def d2(x: float, t: Array = t) -> float:
             q = solve(mech, [x + psi], order=0).positions["P"][0]
             return float(np.sum((q - t) ** 2)) if np.all(np.isfinite(q)) else np.inf
 
@@ -579,6 +596,7 @@ assembling at every target was found ...
             pose, shape = problem.split(full[i : i + 1])
             a = asm[i : i + 1]
             if problem.timing == "prescribed":
+                assert problem.angles is not None  # a prescribed timing comes with its angles
                 rel, sense = problem.angles.copy(), 1.0
             else:
                 rel, sense = problem.assign(pose, shape, a)

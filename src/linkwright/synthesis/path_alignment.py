@@ -90,7 +90,8 @@ def nearest_turn(curve: Array, targets: Array, R: Array, rounds: int = 12) -> tu
 def axis_rotation(axis: Array, angle: float) -> Array:
     """The rotation by ``angle`` about the unit vector ``axis``."""
     k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
+    turned: Array = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
+    return turned
 
 
 def turning_rotation(a: Array, b: Array) -> Array:

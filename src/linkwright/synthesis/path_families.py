@@ -102,7 +102,8 @@ def pattern_gap(F: Array, patterns: Array) -> Array:
     ...  for c in ("crank-rocker", "double-crank")]
     [-35.0, 95.0]
     """
-    return np.min(np.max(-patterns * F[..., None, :], axis=-1), axis=-1)
+    gap: Array = np.min(np.max(-patterns * F[..., None, :], axis=-1), axis=-1)
+    return gap
 
 
 @dataclass(frozen=True)
@@ -167,7 +168,7 @@ class Model:
     # Mechanisms
     # ---------------------------------------------------------------------------------------
 
-    def local(self, shape: Mapping[str, Array], assembly: Array) -> Mechanism:
+    def local(self, shape: Mapping[str, Array | float], assembly: Array | float) -> Mechanism:
         """The batched mechanism standing in the local frame (see the module docstring)."""
         s = shape
         if self.family == "fourbar":
@@ -407,7 +408,8 @@ def path_margin(
         r, l, e = shape["crank"], shape["rod"], shape["offset"]
         s_lo, s_hi, _ = np.broadcast_arrays(*_extremes("sin", lo, hi), r)
         q = np.stack((e + r * s_lo, e + r * s_hi))
-        return np.min(1.0 - (q / l) ** 2, axis=0)
+        least: Array = np.min(1.0 - (q / l) ** 2, axis=0)
+        return least
     a1, a2, a3, a4 = (shape[k] for k in ("crank", "coupler", "rocker", "frame"))
     c = np.stack(np.broadcast_arrays(*_extremes("cos", lo, hi), a1)[:2])
     if model.space == "plane":
@@ -416,7 +418,8 @@ def path_margin(
     else:
         cos_d = np.cos(a1) * np.cos(a4) + np.sin(a1) * np.sin(a4) * c
         m = np.minimum(np.cos(a2 - a3) - cos_d, cos_d - np.cos(a2 + a3))
-    return np.min(m, axis=0)
+    margin: Array = np.min(m, axis=0)
+    return margin
 
 
 MODELS: dict[str, Model] = {
@@ -502,13 +505,15 @@ def rodrigues(w: Array) -> Array:
     safe = np.where(small, 1.0, theta)
     a = np.where(small, 1.0 - theta**2 / 6.0, np.sin(safe) / safe)
     b = np.where(small, 0.5 - theta**2 / 24.0, (1.0 - np.cos(safe)) / safe**2)
-    return np.eye(3) + a * K + b * (K @ K)
+    rotation: Array = np.eye(3) + a * K + b * (K @ K)
+    return rotation
 
 
 def to_user(space: str, local: Array, pose: Array) -> Array:
     """Carry local positions (B, K, d) to the user's frame by poses (B, 3) or (B, 3, 3)."""
     if space == "sphere":
-        return np.einsum("bij,bkj->bki", pose, local)
+        turned: Array = np.einsum("bij,bkj->bki", pose, local)
+        return turned
     c, s = np.cos(pose[:, 2])[:, None], np.sin(pose[:, 2])[:, None]
     x, y = local[..., 0], local[..., 1]
     return np.stack((pose[:, :1] + c * x - s * y, pose[:, 1:2] + s * x + c * y), axis=-1)

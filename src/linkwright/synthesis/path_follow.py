@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -41,6 +42,9 @@ JUMP = 0.9
 """A followed branch's next sample may lie off the line through its last two by at most this
 fraction of the step (a smooth branch: by about the step's square; a jump to another branch,
 where the branch ended at a limit position between two samples: by about the whole step)."""
+
+
+_Item = TypeVar("_Item", bound=np.generic)
 
 
 @dataclass(frozen=True)
@@ -110,7 +114,7 @@ def follow(
         take = ~got.valid[need] & more.valid
         rows = need[:, None]
 
-        def merged(a: Array, b: Array) -> Array:
+        def merged(a: NDArray[_Item], b: NDArray[_Item]) -> NDArray[_Item]:
             out = a.copy()
             mask = take if b.ndim == 2 else take[..., None]
             out[need] = np.where(mask, b, a[rows[:, 0]])
@@ -157,7 +161,7 @@ def _follow_once(
         match &= vals[:, None] == np.broadcast_to(np.asarray(values, dtype=float), (b,))[None]
     at_home = ok[:, rows, home]
     first = np.argmax(match & at_home, axis=0)
-    alive0 = (match & at_home).any(axis=0)
+    alive0 = np.asarray((match & at_home).any(axis=0), dtype=np.bool_)
     count = theta.shape[1]
     chosen = np.zeros((b, count), dtype=int)
     good = np.zeros((b, count), dtype=bool)

@@ -451,7 +451,7 @@ class GenericModel:
 
     def sampled_gaps(
         self, motion: Any, sl: slice, full_turn: bool, mu: float, shape: Any, code: Any
-    ):
+    ) -> list[Array]:
         """Constraints read off a sampled period (each ≤ 0 when met): every dyad's (and
         triad's) least closure margin for a full turn, every dyad's transmission angle."""
         gaps: list[Array] = []
@@ -611,7 +611,9 @@ def _sphere_linkage(mech: Mechanism, R: Array) -> Linkage:
     return Linkage(joints=tuple(joints), traced=mech.plan.traced, space="sphere")
 
 
-def _toward(step: SphereCrank, params: Mapping[str, Any], fixed: Mapping[str, Array]):
+def _toward(
+    step: SphereCrank, params: Mapping[str, Any], fixed: Mapping[str, Array]
+) -> tuple[str, float]:
     """The ground joint whose great circle from the crank's pivot is the crank's zero
     direction (a plan may name any vector; a linkage names a joint), and π where it runs the
     other way along it."""

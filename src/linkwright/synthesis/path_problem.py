@@ -14,8 +14,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
+from linkwright.engine import Motion
 from linkwright.engine.circuits import MAX_TURNS
 from linkwright.mechanisms import solve
 from linkwright.synthesis.path_families import (
@@ -26,6 +27,7 @@ from linkwright.synthesis.path_families import (
     sphere_rotation,
     to_user,
 )
+from linkwright.synthesis.path_follow import Followed
 from linkwright.synthesis.path_models import GenericModel
 from linkwright.synthesis.path_spec import (
     BETWEEN,
@@ -73,7 +75,7 @@ class OutOfTime(Exception):
 class Problem:
     def __init__(
         self,
-        model: Model,
+        model: Model | GenericModel,
         targets: Array,
         angles: Array | None,
         timing: str,
@@ -117,8 +119,8 @@ class Problem:
                     )
             self.turns = model.turns
         self.period = TWO_PI * self.turns
-        self.grid = np.arange(GRID) * (self.period / GRID)
-        self.cover_grid = np.arange(COVERAGE) * (self.period / COVERAGE)
+        self.grid = np.arange(GRID, dtype=np.float64) * (self.period / GRID)
+        self.cover_grid = np.arange(COVERAGE, dtype=np.float64) * (self.period / COVERAGE)
         self.sampled = (model.family == "geared-fivebar" or isinstance(model, GenericModel)) and (
             self.full_turn or self.mu > 0
         )
@@ -159,7 +161,9 @@ class Problem:
 
     # -- the engine -----------------------------------------------------------------------
 
-    def trace(self, pose: Array, shape: dict[str, Array], assembly: Array, rel: Array):
+    def trace(
+        self, pose: Array, shape: dict[str, Array], assembly: Array, rel: Array
+    ) -> tuple[Array, NDArray[np.bool_], Motion | Followed]:
         """Traced points in the user's frame at the inputs ``rel`` (K,) or (B, K), the valid
         mask, and the local motion (for margins and the dyad's joints)."""
         if isinstance(self.model, GenericModel):
@@ -173,7 +177,12 @@ class Problem:
         return P, motion.valid, motion
 
     def gaps(
-        self, shape: dict[str, Array], motion=None, sl=None, hull=None, code=None
+        self,
+        shape: dict[str, Array],
+        motion: Motion | Followed | None = None,
+        sl: slice = slice(None),
+        hull: tuple[ArrayLike, ArrayLike] | None = None,
+        code: Array | None = None,
     ) -> list[tuple[Array, float]]:
         """Every constraint function g (≤ 0 when met, normalised) with the margin by which
         the search keeps inside it. ``hull`` = (lo, hi): the inputs the path sweeps, which
@@ -204,9 +213,13 @@ class Problem:
         pose, shape = self.split(full)
         T = self.targets
         viol = np.zeros(len(genes))
+        sl: slice
+        hull: tuple[ArrayLike, ArrayLike] | None
         if self.timing == "prescribed":
-            mids = _between(self.angles, BETWEEN)
-            rel = np.concatenate([self.angles, mids] + ([self.grid] if self.sampled else []))
+            angles = self.angles
+            assert angles is not None  # a prescribed timing comes with its angles
+            mids = _between(angles, BETWEEN)
+            rel = np.concatenate([angles, mids] + ([self.grid] if self.sampled else []))
             P, valid, motion = self.trace(pose, shape, assembly, rel)
             n, nm = self.n, len(mids)
             d2 = np.sum((P[:, :n] - T) ** 2, axis=-1)
@@ -214,7 +227,7 @@ class Problem:
             err = np.sum(np.where(valid[:, :n], d2, 0.0), axis=1)
             viol += bad.sum(axis=1)
             sl = slice(n + nm, None)
-            hull = (np.min(self.angles), np.max(self.angles))
+            hull = (float(np.min(angles)), float(np.max(angles)))
         else:
             P, valid, motion = self.trace(pose, shape, assembly, self.grid)
             d2, _, seg_ok = _segments(P, valid, T)
@@ -233,15 +246,16 @@ class Problem:
         err = np.where(np.isfinite(err), err, np.inf)
         return err, viol
 
-    def coverage_cost(self, P: Array, valid: Array) -> Array:
+    def coverage_cost(self, P: Array, valid: NDArray[np.bool_]) -> Array:
         """The closed no-timing fit's term: curve samples far from every target (B,)."""
         d = np.sqrt(np.min(np.sum((P[:, :, None] - self.targets) ** 2, axis=-1), axis=-1))
         excess = np.where(valid, np.maximum(d - self.coverage_h, 0.0), 0.0)
-        return (self.n / P.shape[1]) * np.sum(excess**2, axis=1)
+        cost: Array = (self.n / P.shape[1]) * np.sum(excess**2, axis=1)
+        return cost
 
     # -- assignments for the local search ------------------------------------------------
 
-    def assign(self, pose, shape, assembly) -> tuple[Array, float]:
+    def assign(self, pose: Array, shape: dict[str, Array], assembly: Array) -> tuple[Array, float]:
         """Inputs (from the frame line) matching the targets on the grid, for one member, and
         the sense (+1/−1) of a free timing."""
         P, valid, _ = self.trace(pose, shape, assembly, self.grid)
@@ -267,7 +281,9 @@ class Problem:
         return rel, 1.0
 
 
-def _segments(P: Array, valid: NDArray[np.bool_], T: Array):
+def _segments(
+    P: Array, valid: NDArray[np.bool_], T: Array
+) -> tuple[Array, Array, NDArray[np.bool_]]:
     """Squared distances (B, N, M) from each target to each chord of the sampled curve (the
     chord j joins samples j and j + 1, cyclically), where on it (0..1), and which chords join
     two valid samples. Matching targets to chords rather than samples keeps the grid's
@@ -291,7 +307,8 @@ def wrap_angle(angle: float) -> float:
 def solve_batched(M: Array, b: Array) -> Array:
     """Batched solve of M x = b, falling back to least squares for a singular matrix."""
     try:
-        return np.linalg.solve(M, b[..., None])[..., 0]
+        # The stubs widen solve's float64 answer to floating: astype(copy=False) is a no-op.
+        return np.linalg.solve(M, b[..., None])[..., 0].astype(np.float64, copy=False)
     except np.linalg.LinAlgError:
         return np.stack([np.linalg.lstsq(m, c, rcond=None)[0] for m, c in zip(M, b, strict=True)])
 
@@ -320,7 +337,7 @@ def _between(angles: Array, k: int) -> Array:
     return (angles[:-1, None] + np.diff(angles)[:, None] * f).ravel()
 
 
-def _monotone_cost(d2: Array, valid: Array, starts: int = 3) -> Array:
+def _monotone_cost(d2: Array, valid: NDArray[np.bool_], starts: int = 3) -> Array:
     """Least Σ d² over order-keeping matches of the targets to grid samples (B,).
 
     Target 0 takes one of its ``starts`` nearest samples; the others follow in order (equal
@@ -345,7 +362,9 @@ def _monotone_cost(d2: Array, valid: Array, starts: int = 3) -> Array:
     return best
 
 
-def _monotone_path(d2: Array, valid: Array, starts: int = 3) -> tuple[NDArray[np.int64], float]:
+def _monotone_path(
+    d2: Array, valid: NDArray[np.bool_], starts: int = 3
+) -> tuple[NDArray[np.int64], float]:
     """The indices of :func:`_monotone_cost`'s best match for one member, and its sense."""
     N, M = d2.shape
     best = (np.inf, None, 1.0)
@@ -376,7 +395,7 @@ def _monotone_path(d2: Array, valid: Array, starts: int = 3) -> tuple[NDArray[np
     return best[1], best[2]
 
 
-def _nearest_cost(d2: Array, valid: Array) -> tuple[Array, Array]:
+def _nearest_cost(d2: Array, valid: NDArray[np.bool_]) -> tuple[Array, Array]:
     """Σ of each target's least d² over the samples, and how many runs of valid samples
     beyond one the matches use (they must lie on one admissible arc)."""
     idx = np.argmin(d2, axis=2)  # (B, N)

@@ -75,7 +75,7 @@ class Evolution:
 
     def step(self) -> None:
         X, rng = self.X, self.rng
-        n, d = X.shape
+        n, d = int(X.shape[0]), int(X.shape[1])
         F = self.mu_f + 0.1 * rng.standard_cauchy(n)
         while np.any(F <= 0):
             bad = F <= 0
@@ -192,19 +192,22 @@ class LocalSearch:
         self.lo, self.hi = np.array(lo, float), np.array(hi, float)
         self.typ = np.array(typ, float)
         self.x0 = np.clip(np.stack(columns, axis=1), self.lo, self.hi)
-        k = len(starts)
-        self.best_err = np.full(k, np.inf)
-        self.best_obj = np.full(k, np.inf)
+        count = len(starts)
+        self.best_err = np.full(count, np.inf)
+        self.best_obj = np.full(count, np.inf)
         self.best_z = self.x0.copy()
 
-    def decode(self, Z: Array, owner: NDArray[np.int64]):
+    def decode(self, Z: Array, owner: NDArray[np.int64]) -> tuple[Array, dict[str, Array], Array]:
         p = self.p
         B = len(Z)
         j = 0
+        pose: Array
         if self.sphere:
+            assert self.R0 is not None  # every spherical start has its base rotation
             pose = np.einsum("bij,bjk->bik", self.R0[owner], rodrigues(Z[:, :3]))
             j = 3
         else:
+            assert self.fixed_pose is not None  # a planar search fixes its pose's rest
             pose = np.broadcast_to(self.fixed_pose, (B, 3)).copy()
             for i in self.pose_free:
                 pose[:, i] = Z[:, j]
@@ -214,6 +217,7 @@ class LocalSearch:
             shape[k] = Z[:, j]
             j += 1
         if p.timing == "prescribed":
+            assert p.angles is not None  # a prescribed timing comes with its angles
             rel = np.broadcast_to(p.angles, (B, p.n))
         elif p.timing == "free":
             t = Z[:, j + 1 :]
@@ -228,7 +232,9 @@ class LocalSearch:
             rel = Z[:, j:]
         return pose, shape, np.asarray(rel, float)
 
-    def residuals(self, Z: Array, owner: NDArray[np.int64]):
+    def residuals(
+        self, Z: Array, owner: NDArray[np.int64]
+    ) -> tuple[Array, NDArray[np.bool_], Array, NDArray[np.bool_]]:
         """Residual vectors (B, m), the validity pattern, the errors Σ d², feasibility."""
         p = self.p
         pose, shape, rel = self.decode(Z, owner)
@@ -257,17 +263,19 @@ class LocalSearch:
             ex = np.sqrt(p.n / COVERAGE) * np.maximum(d - p.coverage_h, 0.0)
             res.append(np.where(valid[:, at : at + COVERAGE], ex, p.penalty))
             at += COVERAGE
-        sl = slice(at, at + GRID) if p.sampled else None
-        feasible = valid[:, : n + nm].all(axis=1)
+        sl = slice(at, at + GRID) if p.sampled else slice(None)
+        feasible = np.asarray(valid[:, : n + nm].all(axis=1))
         hull = (rel.min(axis=1), rel.max(axis=1))
         for g, margin in p.gaps(shape, motion, sl, hull, self.assembly[owner]):
             res.append((WEIGHT * p.size * np.maximum(g + margin, 0.0))[:, None])
             feasible &= g <= 0.0
         return np.concatenate(res, axis=1), valid, err, feasible
 
-    def _note(self, Z: Array, owner, R: Array, err: Array, ok: Array) -> Array:
+    def _note(
+        self, Z: Array, owner: NDArray[np.int64], R: Array, err: Array, ok: NDArray[np.bool_]
+    ) -> Array:
         """Keep each start's best feasible point; return the objectives Σ r²."""
-        obj = np.sum(R * R, axis=1)
+        obj: Array = np.sum(R * R, axis=1)
         # Penalties vanish at a feasible point, so Σ r² is the objective there.
         better = ok & (obj < self.best_obj[owner])
         for b in np.flatnonzero(better):
@@ -276,7 +284,9 @@ class LocalSearch:
                 self.best_obj[o], self.best_err[o], self.best_z[o] = obj[b], err[b], Z[b]
         return obj
 
-    def _jacobians(self, Z: Array, owner, R0: Array, V0: Array) -> Array:
+    def _jacobians(
+        self, Z: Array, owner: NDArray[np.int64], R0: Array, V0: NDArray[np.bool_]
+    ) -> Array:
         """Finite-difference Jacobians (K, m, n) at the rows Z, one batched evaluation.
 
         A difference across a change of validity (a sample that stops assembling) measures the
@@ -302,8 +312,9 @@ class LocalSearch:
         fwd = sp & ~central & (ui > zi)
         bwd = sm & ~central & ~fwd & (di < zi)
 
-        def safe(x):
-            return np.where(x != 0, x, 1.0)
+        def safe(x: Array) -> Array:
+            nonzero: Array = np.where(x != 0, x, 1.0)
+            return nonzero
 
         J = np.where(
             central[..., None],
@@ -314,7 +325,8 @@ class LocalSearch:
                 np.where(bwd[..., None], (R0[:, None] - Rm) / safe(zi - di)[..., None], 0.0),
             ),
         )
-        return np.swapaxes(J, 1, 2)
+        jacobians: Array = np.swapaxes(J, 1, 2)
+        return jacobians
 
     def levenberg_marquardt(self, iterations: int) -> None:
         """Advance every start by Levenberg–Marquardt steps with geodesic acceleration,
@@ -384,9 +396,9 @@ class LocalSearch:
     def polish(self, k: int, max_nfev: int = 200) -> None:
         """Finish start k with :func:`scipy.optimize.least_squares` (trust region, bounds)."""
         owner = np.array([k])
-        cache: dict[bytes, tuple] = {}
+        cache: dict[bytes, tuple[Array, NDArray[np.bool_]]] = {}
 
-        def evaluate(z: Array):
+        def evaluate(z: Array) -> tuple[Array, NDArray[np.bool_]]:
             key = z.tobytes()
             if key not in cache:
                 if time.perf_counter() > self.deadline:
@@ -399,7 +411,8 @@ class LocalSearch:
 
         def jac(z: Array) -> Array:
             r, v = evaluate(z)
-            return self._jacobians(z[None], owner, r[None], v[None])[0]
+            jacobian: Array = self._jacobians(z[None], owner, r[None], v[None])[0]
+            return jacobian
 
         with contextlib.suppress(OutOfTime):
             least_squares(

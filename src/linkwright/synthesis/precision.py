@@ -42,7 +42,7 @@ Mirth, "Circuits and branches of single-degree-of-freedom planar linkages", J. M
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from linkwright.geometry import plane
 from linkwright.mechanisms import FourBar
@@ -330,8 +330,13 @@ def three_pose_fourbar(
 
 
 def _dyad_solve(
-    delta: Array, turn: Array, coupler_turn: Array, scale: Array, what: str, label: str
-) -> tuple[Array, Array]:
+    delta: NDArray[np.complex128],
+    turn: Array,
+    coupler_turn: Array,
+    scale: Array,
+    what: str,
+    label: str,
+) -> tuple[NDArray[np.complex128], NDArray[np.complex128]]:
     """W, Z (complex) of the standard dyad form W(e^{iβj} − 1) + Z(e^{iαj} − 1) = δj, j = 2, 3."""
     m11, m12 = np.exp(1j * turn[..., 0]) - 1, np.exp(1j * coupler_turn[..., 0]) - 1
     m21, m22 = np.exp(1j * turn[..., 1]) - 1, np.exp(1j * coupler_turn[..., 1]) - 1

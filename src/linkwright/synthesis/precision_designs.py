@@ -13,11 +13,12 @@ linkages", J. Mech. Des. 115 (1993) 223–230).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from linkwright.engine import evaluate
+from linkwright.engine import Motion, evaluate
 from linkwright.geometry import plane
 from linkwright.mechanisms import FourBar, input_range
 
@@ -72,7 +73,21 @@ def first_true(mask: NDArray[np.bool_]) -> tuple[int, ...] | None:
     return tuple(int(i) for i in np.argwhere(mask)[0])
 
 
-def pose_set(points: ArrayLike, angles: ArrayLike | None, n: int | None, what: str):
+@overload
+def pose_set(
+    points: ArrayLike, angles: None, n: int | None, what: str
+) -> tuple[Array, None, Array]: ...
+@overload
+def pose_set(
+    points: ArrayLike, angles: ArrayLike, n: int | None, what: str
+) -> tuple[Array, Array, Array]: ...
+@overload
+def pose_set(
+    points: ArrayLike, angles: ArrayLike | None, n: int | None, what: str
+) -> tuple[Array, Array | None, Array]: ...
+def pose_set(
+    points: ArrayLike, angles: ArrayLike | None, n: int | None, what: str
+) -> tuple[Array, Array | None, Array]:
     """Checked (points (..., n, 2), angles (..., n) or None, scale (...))."""
     p = np.asarray(points, dtype=float)
     if p.ndim < 2 or p.shape[-1] != 2:
@@ -161,7 +176,8 @@ def pose_positions(points: ArrayLike, angles: ArrayLike, first: ArrayLike) -> Ar
         x = x[None]
     rot = rotation_matrix(a - a[..., :1])  # (..., n, 2, 2)
     rel = x[..., None, :, :] - p[..., :1, None, :]  # (..., 1, m, 2)
-    return p[..., :, None, :] + np.einsum("...nij,...nmj->...nmi", rot, rel)
+    placed: Array = p[..., :, None, :] + np.einsum("...nij,...nmj->...nmi", rot, rel)
+    return placed
 
 
 # --- the report ----------------------------------------------------------------------------------
@@ -178,7 +194,8 @@ def find_order_defect(mech: FourBar, inputs: Array) -> NDArray[np.bool_]:
     turning = ccw | cw
     lo, hi = np.asarray(arcs.lo), np.asarray(arcs.hi)
     if lo.shape[-1] == 0:
-        return ~turning
+        never: NDArray[np.bool_] = ~turning
+        return never
     span = hi - lo
     tol = 1e-9
     # s[..., j, k]: how far input j lies into arc k (NaN-padded arcs never contain it).
@@ -189,7 +206,8 @@ def find_order_defect(mech: FourBar, inputs: Array) -> NDArray[np.bool_]:
     along = np.take_along_axis(s, arc[..., None], -1)[..., 0]
     d = np.diff(along, axis=-1)
     monotone = np.all(d > 0, axis=-1) | np.all(d < 0, axis=-1) if n > 1 else np.ones_like(ccw)
-    return np.where(np.asarray(arcs.full), ~turning, ~(one_arc & monotone))
+    defect: NDArray[np.bool_] = np.where(np.asarray(arcs.full), ~turning, ~(one_arc & monotone))
+    return defect
 
 
 def assembly_branches(A0: Array, B0: Array, A: Array, B: Array, scale: Array, what: str) -> Array:
@@ -211,7 +229,7 @@ def assembly_branches(A0: Array, B0: Array, A: Array, B: Array, scale: Array, wh
     return np.where(side >= 0, 1.0, -1.0)
 
 
-def simulate_design(mech: FourBar, inputs: Array, branches: Array):
+def simulate_design(mech: FourBar, inputs: Array, branches: Array) -> Motion:
     """The engine's motion at ``inputs``, each on its own assembly sign."""
     return evaluate(
         mech.plan, mech.params(), inputs, points=mech.points, branches={"B": branches}, order=0
@@ -249,7 +267,8 @@ class MotionDesign:
     @property
     def error(self) -> Array:
         """The larger of the two errors at the worst pose (batch shape)."""
-        return np.maximum(np.max(self.position_error, -1), np.max(self.angle_error, -1))
+        worst: Array = np.maximum(np.max(self.position_error, -1), np.max(self.angle_error, -1))
+        return worst
 
 
 @dataclass(frozen=True)

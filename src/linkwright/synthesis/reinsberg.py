@@ -44,7 +44,6 @@ from numpy.typing import NDArray
 from linkwright.analysis import fourbar_class, input_limits, transmission_extremes
 from linkwright.analysis.planar import FOURBAR_CLASSES
 from linkwright.mechanisms import FourBar, SphericalFourBar, input_range
-from linkwright.mechanisms.base import Mechanism
 
 __all__ = [
     "DIMENSIONS",
@@ -116,8 +115,10 @@ def _dims(fb: FourBar | SphericalFourBar) -> dict[str, Array]:
     )
 
 
-def _with(fb: FourBar | SphericalFourBar, field: str, value: Array) -> Mechanism:
-    if isinstance(fb, FourBar) and field == "frame":
+def _with(fb: FourBar | SphericalFourBar, field: str, value: Array) -> FourBar | SphericalFourBar:
+    if isinstance(fb, SphericalFourBar):
+        return replace(fb, **{field: value})
+    if field == "frame":
         a0, b0 = np.asarray(fb.A0, float), np.asarray(fb.B0, float)
         d = b0 - a0
         along = d / np.linalg.norm(d, axis=-1, keepdims=True)
@@ -232,7 +233,7 @@ def reinsberg_mechanism(
         raise ReinsbergError(
             f"{field}: no value makes γ1 + γ2 = 180° ({shown}): {_why(d, field, kind, spherical)}"
         )
-    return _with(fb, field, value)  # type: ignore[return-value]
+    return _with(fb, field, value)
 
 
 def _why(d: dict[str, float], field: str, kind: str | None, spherical: bool) -> str:

@@ -13,7 +13,7 @@ the box); :func:`merge_points` deduplicates what they reach. The method is descr
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -83,7 +83,16 @@ MAX_SEEDS = 600
 class TargetProblem:
     """The residuals of a problem at many points, in chunks, with undefined points masked."""
 
-    def __init__(self, make, outputs, values, lo, hi, where, progress):
+    def __init__(
+        self,
+        make: Callable[[Array], Mechanism],
+        outputs: Sequence[tuple[str, Callable[[Mechanism], ArrayLike]]],
+        values: Array,
+        lo: Array,
+        hi: Array,
+        where: Callable[[Mechanism], ArrayLike] | None,
+        progress: Callable[[float], None] | None,
+    ) -> None:
         self.make = make
         self.outputs = outputs
         self.target = values
@@ -151,7 +160,8 @@ class TargetProblem:
                     self.progress(done + share * min(i + CHUNK, x.shape[0]) / x.shape[0])
         self.count += x.shape[0]
         f = np.concatenate(parts) if parts else np.empty((0, len(self.outputs)))
-        return np.where(np.all(np.isfinite(f), axis=-1, keepdims=True), f, np.nan)
+        kept: Array = np.where(np.all(np.isfinite(f), axis=-1, keepdims=True), f, np.nan)
+        return kept
 
     def residual(self, f: Array) -> Array:
         return (f - self.target) / self.scale

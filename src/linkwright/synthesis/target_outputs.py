@@ -11,7 +11,7 @@ is the cautionary case of ill-conditioning (:func:`linkwright.papers.p003.synthe
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -208,7 +208,7 @@ class TargetSolutions:
     def __len__(self) -> int:
         return len(self.solutions)
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[TargetSolution]:
         return iter(self.solutions)
 
     def __getitem__(self, i: int) -> TargetSolution:

@@ -295,7 +295,9 @@ ARC_MARGIN = math.radians(1.0)
 LENGTH_RANGE = (0.1, 5.0)
 
 
-def _fourbar_maker(family: str, fixed: Mapping[str, float], free: Sequence[str]):
+def _fourbar_maker(
+    family: str, fixed: Mapping[str, float], free: Sequence[str]
+) -> Callable[[Array], Mechanism]:
     def make(x: Array) -> Mechanism:
         x = np.asarray(x, dtype=float)
         dims = {n: x[..., i] for i, n in enumerate(free)}
@@ -445,7 +447,10 @@ def design_fourbar(
     if kind is not None:
 
         def where(mech: Mechanism) -> NDArray[np.bool_]:
-            return np.asarray(fourbar_class(mech)) == kind
+            # _fourbar_maker builds only these two families.
+            assert isinstance(mech, FourBar | SphericalFourBar)
+            same: NDArray[np.bool_] = np.asarray(fourbar_class(mech)) == kind
+            return same
 
     return design_to_targets(
         _fourbar_maker(family, fixed_v, free),

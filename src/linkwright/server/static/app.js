@@ -16,6 +16,10 @@ import {
   drawAll, drawing, fitPlane, fromScreenPlane, layoutStage, projectSphere, requestDraw,
   resetSphere, sphereGeom, toScreen, toScreenPlane, unprojectSphere,
 } from "./draw.js";
+import { explainError } from "./fields.js";
+import { checkpoint, historyInfo, initHistory, markLoaded, redoStep, undoStep } from "./history.js";
+import { initShare, openFirst, shareLink } from "./share.js";
+import { initOverlays } from "./overlays.js";
 
 // ------------------------------------------------------------------ pointer interaction
 function canvasPoint(e) {
@@ -155,6 +159,8 @@ function onPointerUp(e) {
     }
   } else if (g.kind === "joint") {
     if (state.dragPipe) state.dragPipe.ended = true;
+    // one drag, one undo step: taken now, or when the drag's last answer is drawn (pumpDrag)
+    if (!state.dragPipe || !state.dragPipe.busy) checkpoint();
     requestDraw();
   }
 }
@@ -174,13 +180,16 @@ function pumpDrag() {
     })
     .catch((err) => {
       state.pipelineError = true;
-      status(`${pipe.joint}: ${err.message}`, "error");
+      status(`${pipe.joint}: ${explainError(err.message)}`, "error");
     })
     .finally(() => {
       pipe.busy = false;
       setBusy(-1);
       if (pipe.latest) pumpDrag();
-      else if (pipe.ended && state.dragPipe === pipe) state.dragPipe = null;
+      else if (pipe.ended && state.dragPipe === pipe) {
+        state.dragPipe = null;
+        checkpoint();
+      }
     });
 }
 
@@ -355,6 +364,12 @@ const lw = {
     zoom: state.sphere.zoom,
   }),
   refresh: () => requestScene(clone(state.latestRequested || state.doc), state.at),
+  // history.js and share.js: undo, redo, the state of the history, a link to this state
+  undo: undoStep,
+  redo: redoStep,
+  history: historyInfo,
+  markSaved: markLoaded,
+  shareLink,
 };
 window.lw = lw;
 
@@ -431,6 +446,9 @@ function wire() {
     if (e.key === "Enter") e.target.blur();
   });
   document.addEventListener("keydown", onKey);
+  initHistory();
+  initShare();
+  initOverlays();
   setupTabs();
   new ResizeObserver(() => onResize()).observe($("stage"));
 }
@@ -446,11 +464,8 @@ async function start() {
     status(e.message, "error");
     return;
   }
-  let name = decodeURIComponent((location.hash || "").replace(/^#/, ""));
-  if (!state.examples.some((e) => e.name === name)) name = "";
-  if (!name) name = state.examples.some((e) => e.name === "crank-rocker") ? "crank-rocker" : (state.examples[0] || {}).name;
-  if (name) await loadExample(name);
-  else if (state.families.length) await loadFamily(state.families[0].family);
+  // a shared link, the work kept from a reload, the example the address names, or the default
+  await openFirst();
 }
 
 if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start);

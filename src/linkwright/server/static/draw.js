@@ -9,6 +9,7 @@ import { currentPose, ownModeIndex, samplePose, sceneScale, state } from "./pipe
 import { modeStyle, ownLimits } from "./panels.js";
 import { drawMap, drawSphere } from "./sphere.js";
 import { drawChartsCursor } from "./charts.js";
+import { drawMotionOverlays } from "./overlays.js";
 
 // ------------------------------------------------------------------ views
 export const drawing = () => $("drawing");
@@ -171,6 +172,7 @@ export function drawAll() {
     drawSphere();
     drawMap();
   } else drawPlane();
+  drawMotionOverlays();
   drawChartsCursor();
 }
 

@@ -8,6 +8,8 @@ import {
 import { api, emit, ownModeIndex, requestScene, state, status } from "./pipeline.js";
 import { drawAll } from "./draw.js";
 import { hideTooltip } from "./app.js";
+import { wireField } from "./fields.js";
+import { markLoaded } from "./history.js";
 
 // ------------------------------------------------------------------ top bar, choosers
 export function renderTop(sc) {
@@ -70,6 +72,7 @@ export async function loadExample(name) {
     status(`Loading ${name}…`, "busy");
     const sc = await requestScene(doc, null, { fit: true, exampleName: name });
     if (sc) {
+      markLoaded();
       status(`Loaded example “${sc.document.title || name}”`, "info");
       try {
         history.replaceState(null, "", `#${encodeURIComponent(name)}`);
@@ -87,7 +90,10 @@ export async function loadFamily(family) {
     const doc = await api(`/api/families/${encodeURIComponent(family)}/default`);
     const f = state.families.find((x) => x.family === family);
     const sc = await requestScene(doc, null, { fit: true, exampleName: f ? f.example : null });
-    if (sc) status(`${sc.family_name}: ${sc.document.title || "default mechanism"}`, "info");
+    if (sc) {
+      markLoaded();
+      status(`${sc.family_name}: ${sc.document.title || "default mechanism"}`, "info");
+    }
   } catch (e) {
     status(e.message, "error");
   }
@@ -143,17 +149,15 @@ export function renderFields(sc) {
           const o = new Option(f.kind === "sign" ? signLabel(ch) : String(ch), JSON.stringify(ch));
           input.appendChild(o);
         }
-        input.addEventListener("change", () => onFieldEdit(input, f, true));
       } else {
+        // text, not number: the page parses what was typed (a number input hides "abc" and
+        // "1e" behind an empty value) and applies it on Enter or on leaving (fields.js)
         input = document.createElement("input");
-        input.type = "number";
-        input.step = f.kind === "angle" ? "1" : "0.1";
+        input.type = "text";
         input.inputMode = "decimal";
-        input.addEventListener("input", () => onFieldEdit(input, f, false));
-        input.addEventListener("keydown", (e) => {
-          if (e.key === "Enter") onFieldEdit(input, f, true);
-        });
+        input.spellcheck = false;
       }
+      wireField(input, f);
       input.id = id;
       input.dataset.path = f.path;
       input.dataset.kind = f.kind;
@@ -167,9 +171,13 @@ export function renderFields(sc) {
   }
   for (const f of fields) {
     const el = form.querySelector(`[data-path="${CSS.escape(f.path)}"]`);
-    if (!el || document.activeElement === el) continue;
+    // text being typed stays; a focused field that holds what was applied follows the document
+    if (!el || (el.tagName === "INPUT" && document.activeElement === el && el.value !== el.dataset.applied)) {
+      continue;
+    }
     if (el.tagName === "SELECT") el.value = JSON.stringify(f.value);
     else el.value = fmtInput(f.value);
+    el.dataset.applied = el.value;
     el.classList.remove("invalid");
   }
   $("family-name").textContent = sc.family_name || sc.family;
@@ -187,29 +195,6 @@ export function markField(path, message) {
     el.classList.add("invalid");
     el.title = message || "";
   }
-}
-
-// No debounce: requestScene keeps at most one request in flight and sends the latest value
-// when it returns, so a burst of keystrokes costs one round trip, and a single change is
-// drawn as soon as the server answers (the redraw's latency target is 50 ms).
-function onFieldEdit(input, f, now) {
-  let value;
-  if (input.tagName === "SELECT") value = JSON.parse(input.value);
-  else {
-    const text = input.value.trim();
-    if (text === "" && !now) return; // cleared to type a new number: wait for it
-    value = Number(text);
-    if (text === "" || !Number.isFinite(value)) {
-      markField(f.path, "not a number");
-      status(`${f.label}: enter a number`, "error");
-      state.pipelineError = true;
-      return;
-    }
-  }
-  const base = clone(state.latestRequested || state.doc);
-  if (!base) return;
-  setPath(base, f.path, value);
-  requestScene(base, state.at, { fieldPath: f.path });
 }
 
 export function renderInfo(sc) {

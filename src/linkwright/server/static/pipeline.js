@@ -9,6 +9,7 @@ import {
 import { drawAll, layoutStage, resetSphere } from "./draw.js";
 import { fitMapBasis } from "./sphere.js";
 import { renderCharts } from "./charts.js";
+import { explainError, fieldRefused } from "./fields.js";
 
 // ------------------------------------------------------------------ state
 export const state = {
@@ -37,6 +38,7 @@ export const state = {
   sceneCount: 0,
   busy: 0,
   pipelineError: false,
+  sceneError: null, // the last refused scene's message, in the page's words
   fieldSig: "",
   chartSig: "",
   plotKind: "angles",
@@ -103,6 +105,9 @@ export function status(text, kind) {
   el.textContent = text == null ? "" : String(text);
   el.dataset.kind = kind || "info";
   el.title = el.textContent;
+  // an action offered beside a message (history.js) belongs to that message only
+  const action = $("status-action");
+  if (action) action.hidden = true;
 }
 
 // ------------------------------------------------------------------ scene pipeline
@@ -142,7 +147,7 @@ async function pumpScene() {
   sceneInFlight = true;
   let result = null;
   try {
-    const body = { document: job.doc, samples: SAMPLES, at: finite(job.at) ? job.at : null, diagrams: true };
+    const body = { document: job.doc, samples: SAMPLES, at: finite(job.at) ? job.at : null, diagrams: true, ...state.sceneFlags };
     const sc = await api("/api/scene", body);
     if (!scenePending) state.latestRequested = null;
     applyScene(sc, job);
@@ -150,8 +155,12 @@ async function pumpScene() {
   } catch (e) {
     if (!scenePending) state.latestRequested = null;
     state.pipelineError = true;
-    status(e.message, "error");
-    markField(job.fieldPath, e.message);
+    // the page's words: the edited field's label, not the server's document path
+    const text = explainError(e.message, job.fieldPath, job.doc);
+    state.sceneError = text;
+    status(text, "error");
+    markField(job.fieldPath, text);
+    fieldRefused(job.fieldPath);
     if (!state.scene) drawAll();
   } finally {
     sceneInFlight = false;
@@ -257,22 +266,7 @@ function applyScene(sc, job) {
     status("Ready", "info");
   }
   markField(null);
-  state.cur = locate(sc, finite(sc.at) ? sc.at : job.at, freshKind || job.fit ? null : previous);
-  state.exact = null;
-  if (state.cur) {
-    const circ = sc.modes[state.cur.mode].circuits[state.cur.circuit];
-    state.at = circ.input[state.cur.index];
-    if (sc.pose && finite(sc.at)) {
-      const samp = samplePose(sc, state.cur.mode, state.cur.circuit, state.cur.index);
-      const tol = 0.05 * sceneScale(sc) + 1e-9;
-      if (poseDistance(sc.pose, samp) <= tol) {
-        state.exact = sc.pose;
-        state.at = sc.at;
-      }
-    }
-  } else {
-    state.at = finite(sc.at) ? sc.at : null;
-  }
+  placeCursor(sc, locate(sc, finite(sc.at) ? sc.at : job.at, freshKind || job.fit ? null : previous));
   state.map.basis = sc.space === "sphere" ? fitMapBasis(sc) : null;
   if (freshKind || job.fit) {
     state.view.fitted = false;
@@ -294,6 +288,27 @@ function applyScene(sc, job) {
   state.sceneCount += 1;
   document.body.dataset.sceneCount = String(state.sceneCount);
   emit("scene", sc);
+}
+
+/** Show sample `cur` ({mode, circuit, index}, or null) of scene `sc`: at the scene's exact pose
+ * when that sample is the pose the server computed at `sc.at`. */
+export function placeCursor(sc, cur) {
+  state.cur = cur;
+  state.exact = null;
+  if (state.cur) {
+    const circ = sc.modes[state.cur.mode].circuits[state.cur.circuit];
+    state.at = circ.input[state.cur.index];
+    if (sc.pose && finite(sc.at)) {
+      const samp = samplePose(sc, state.cur.mode, state.cur.circuit, state.cur.index);
+      const tol = 0.05 * sceneScale(sc) + 1e-9;
+      if (poseDistance(sc.pose, samp) <= tol) {
+        state.exact = sc.pose;
+        state.at = sc.at;
+      }
+    }
+  } else {
+    state.at = finite(sc.at) ? sc.at : null;
+  }
 }
 
 export function currentPose() {

@@ -386,6 +386,8 @@
       try {
         const entry = await call("POST", "/api/library", { name: n, document: lw.document(), overwrite });
         current = entry.id;
+        // What the library holds is saved work: leaving the page no longer asks.
+        if (lw.markSaved) lw.markSaved();
         lwStatus(`saved “${entry.name}” in the library`, "info");
         await refresh();
         setState(root, "done");
@@ -412,6 +414,7 @@
         if (!(await lw.setDocument(full.document, { title: full.document.title }))) {
           throw new Error(`“${entry.name}” could not be drawn`);
         }
+        if (lw.markSaved) lw.markSaved();
         nameTouched = true;
         name.value = entry.name;
         render();

@@ -1,0 +1,243 @@
+"""A linkage driven at a moving hinge: the input is the angle between two moving links.
+
+A motor carried by a link (on a coupler, in a robot's elbow) drives the angle at a hinge H
+between its link to a placed joint Y (length b) and its link to a joint X (length a), and X
+hangs from a placed joint Z by a link of length r. The angle φ at H, from H→Y to H→X
+(counter-clockwise), is the input plus a phase. The triangle H X Y then has a known shape: by
+the law of cosines |X − Y| = d(φ) with d² = a² + b² − 2ab cos φ, so X is circle(Z, r) ∩
+circle(Y, d(φ)), a dyad whose second length follows the input, and H follows from X, Y and φ.
+In complex numbers, with q(φ) = b − a e^{iφ} (so |q| = d),
+
+    X − Y = e^{iψ} q,     H = Y + b (X − Y) / q,
+
+ψ the direction of Y→H: smooth in φ wherever d > 0, through φ = 0 and π too, where H lies on
+the line X Y and a plain dyad for H would be singular. A four-bar driven at its coupler–rocker
+hinge is the smallest case (Z = A0, X = A, H = B, Y = B0); every linkage whose driven hinge
+closes such a loop compiles to a plan with this step in place of a crank.
+
+The step has two poses, X on either side of Z→Y (pose 1 on the left, the engine's +1 dyad
+sign), and a signed closure, sin of the angle at Z, which vanishes where they merge: the pose
+index changes there (a limit position of the input), as a triad's does, and circuit tracing
+crosses it the same way (:mod:`linkwright.engine.continuation`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from linkwright.engine.state import (
+    ASSEMBLY_TOL,
+    SINGULAR_SIN,
+    Array,
+    Context,
+    JointState,
+    Param,
+    Params,
+    Positions,
+    derivative,
+    first,
+    mask_derivatives,
+    number,
+    param_value,
+    word,
+)
+from linkwright.geometry import plane
+
+__all__ = ["Hinge"]
+
+
+def _complex(v: Array) -> Array:
+    c: Array = v[..., 0] + 1j * v[..., 1]
+    return c
+
+
+def _vector(c: Array) -> Array:
+    return np.stack((c.real, c.imag), axis=-1)
+
+
+@dataclass(frozen=True)
+class Hinge:
+    """Joints ``hinge`` (H) and ``far`` (X) of a linkage driven at the hinge H.
+
+    X lies at ``r`` from ``z`` and H at ``a`` from X and ``b`` from ``y``; the angle at H from
+    H→Y to H→X is ``phase + θ``. The branch parameter ``pose`` is 0 or 1: X to the right or the
+    left of Z→Y.
+
+    Examples
+    --------
+    A four-bar driven at its coupler–rocker hinge B (A0 at the origin, B0 at (4, 0), crank 1,
+    coupler 3.5, rocker 3), the angle at B 90°: A is where |A0 A| = 1 and |A B0| = √(3.5² + 3²).
+
+    >>> from linkwright.engine import Fixed, Plan, evaluate
+    >>> plan = Plan((Fixed("A0", "A0"), Fixed("B0", "B0"),
+    ...              Hinge("B", "A", "A0", 1.0, "B0", 3.5, 3.0)), traced=("B",))
+    >>> m = evaluate(plan, {"A0": [0.0, 0.0], "B0": [4.0, 0.0]}, np.array([np.pi / 2]),
+    ...              points=frozenset({"A0", "B0"}), branches={"B": 1.0})
+    >>> a, b = m.positions["A"][0], m.positions["B"][0]
+    >>> round(float(np.hypot(*(a - [4.0, 0.0]))), 12), round(float(np.hypot(*a)), 12)
+    (4.609772228646, 1.0)
+    >>> u, v = a - b, np.array([4.0, 0.0]) - b
+    >>> round(float(np.degrees(np.arctan2(v[0] * u[1] - v[1] * u[0], v @ u))), 9)
+    90.0
+
+    Where the links cannot close (the angle asks X farther from Y than Z's link reaches), no
+    pose exists and the step says why:
+
+    >>> far = evaluate(plan, {"A0": [0.0, 0.0], "B0": [9.0, 0.0]}, np.array([0.0]),
+    ...                points=frozenset({"A0", "B0"}), branches={"B": 1.0})
+    >>> bool(far.valid[0])
+    False
+    """
+
+    hinge: str
+    far: str
+    z: str
+    r: Param
+    y: str
+    a: Param
+    b: Param
+    phase: Param = 0.0
+    pose: str = "pose"
+
+    max_poses = 2
+    space = "plane"
+
+    @property
+    def name(self) -> str:
+        """The step's name, under which its pose index is kept: the hinge."""
+        return self.hinge
+
+    @property
+    def joints(self) -> tuple[str, str]:
+        return (self.hinge, self.far)
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys((self.z, self.y)))
+
+    @property
+    def title(self) -> str:
+        return f"driven hinge {self.hinge}"
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The three binary links: Z–X, X–H and H–Y."""
+        return ((self.z, self.far), (self.far, self.hinge), (self.hinge, self.y))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        return ()
+
+    def place(self, ctx: Context) -> dict[str, JointState]:
+        jz, jy = ctx.joint(self.z), ctx.joint(self.y)
+        r, a, b = ctx.scalar(self.r), ctx.scalar(self.a), ctx.scalar(self.b)
+        phi = ctx.scalar(self.phase) + ctx.theta
+        e = np.exp(1j * phi)
+        q = b - a * e
+        d = np.abs(q)
+        asked = np.asarray(ctx.branch(self.name, self.pose), dtype=float)
+        usable = np.where(np.isfinite(asked), asked, 0.0)
+        index = np.clip(np.rint(usable), 0, 1)
+        sign = np.where(index == 1, 1.0, -1.0)
+        meet = plane.circle_circle(jz.pos, r, jy.pos, d, sign, tol=ASSEMBLY_TOL)
+        valid = jz.valid & jy.valid & meet.valid & (asked == index) & (d > 0)
+        x = np.where(valid[..., None], meet.point, np.nan)
+        w = _complex(x - jy.pos)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h = jy.pos + _vector(b * w / q)
+            span = plane.norm(jy.pos - jz.pos)
+            closure = plane.cross(jy.pos - jz.pos, x - jz.pos) / (span * r)
+        regular = valid & jz.regular & jy.regular & (np.abs(closure) > SINGULAR_SIN)
+        vel_x = vel_h = acc_x = acc_h = None
+        if ctx.order >= 1:
+            vz, vy = derivative(jz.vel), derivative(jy.vel)
+            rel_z, rel_y = x - jz.pos, x - jy.pos
+            dd1 = a * b * np.sin(phi)  # d·d′, from d² = a² + b² − 2ab cos φ
+            vel_x, _ = plane.solve_2x2_rows(
+                rel_z, rel_y, plane.dot(rel_z, vz), plane.dot(rel_y, vy) + dd1
+            )
+            q1 = -1j * a * e
+            w1 = _complex(vel_x - vy)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                vel_h = vy + _vector(b * (w1 / q - w * q1 / q**2))
+        if ctx.order >= 2:
+            assert vel_x is not None
+            az, ay = derivative(jz.acc), derivative(jy.acc)
+            sz, sy = vel_x - vz, vel_x - vy
+            acc_x, _ = plane.solve_2x2_rows(
+                rel_z,
+                rel_y,
+                plane.dot(rel_z, az) - plane.dot(sz, sz),
+                plane.dot(rel_y, ay) - plane.dot(sy, sy) + a * b * np.cos(phi),
+            )
+            q2 = a * e
+            w2 = _complex(acc_x - ay)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                acc_h = ay + _vector(
+                    b * (w2 / q - 2 * w1 * q1 / q**2 - w * q2 / q**2 + 2 * w * q1**2 / q**3)
+                )
+        label = np.where(closure >= 0, 1.0, -1.0)
+        states = {}
+        for name, pos, vel, acc in ((self.hinge, h, vel_h, acc_h), (self.far, x, vel_x, acc_x)):
+            vel, acc = mask_derivatives(vel, acc, regular)
+            states[name] = JointState(
+                np.where(valid[..., None], pos, np.nan),
+                vel,
+                acc,
+                valid,
+                regular,
+                margin=closure,
+                branch=asked,
+                label=label,
+            )
+        return states
+
+    def closure(self, positions: Positions, params: Params) -> Array:
+        """sin of the angle at Z between Z→Y and Z→X: 0 where X's two poses merge (Z, X, Y in
+        line), its sign the pose's side."""
+        z, y, x = positions[self.z], positions[self.y], positions[self.far]
+        r = param_value(self.r, params)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            value: Array = plane.cross(y - z, x - z) / (plane.norm(y - z) * r)
+        return value
+
+    def residual(self, positions: Positions, params: Params, theta: ArrayLike) -> Array:
+        """The largest error of the three links' lengths and of X against the angle at H
+        (X − H = a·e^{iφ}·(Y − H)/b, a length)."""
+        z, y = positions[self.z], positions[self.y]
+        x, h = positions[self.far], positions[self.hinge]
+        r, a, b = (param_value(p, params) for p in (self.r, self.a, self.b))
+        phi = param_value(self.phase, params) + np.asarray(theta, dtype=float)
+        want = _vector(a * np.exp(1j * phi) * _complex(y - h) / b)
+        errors = (
+            np.abs(plane.norm(x - z) - r),
+            np.abs(plane.norm(x - h) - a),
+            np.abs(plane.norm(y - h) - b),
+            plane.norm(x - h - want),
+        )
+        worst: Array = np.maximum.reduce(np.broadcast_arrays(*errors))
+        return worst
+
+    def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
+        """Why the hinge's loop cannot close at an input."""
+        h, x, z, y = self.hinge, self.far, self.z, self.y
+        if positions is None or params is None:
+            return (
+                f"driven hinge {h}: at this angle {x} is too far from {y} (or too near) for the "
+                f"link {z}{x} to reach"
+            )
+        span = first(plane.norm(positions[y] - positions[z]))
+        r = number(self.r, params)
+        return (
+            f"driven hinge {h}: {x} must lie at {word(self.r)} = {r:.6g} from {z} and at the "
+            f"distance the angle at {h} sets from {y}, but |{z} {y}| = {span:.6g} leaves no "
+            "such point at this input"
+        )
+
+    def at_limit(self) -> str:
+        """What happens at a limit position of the input."""
+        return (
+            f"driven hinge {self.hinge}: {self.z}, {self.far} and {self.y} fall in line, where "
+            f"the two places of {self.far} merge"
+        )
