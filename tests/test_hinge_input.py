@@ -21,15 +21,18 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from linkwright.cli import main
+from linkwright.geometry import sphere
 from linkwright.io.documents import load_document, mechanism_to_dict, parse_document
 from linkwright.mechanisms import (
     CrankJoint,
+    DyadJoint,
     FixedJoint,
     FourBar,
     HingeJoint,
     InvalidLinkage,
     Linkage,
     RigidJoint,
+    SphereCrankJoint,
     circuits,
     input_range,
     solve,
@@ -223,3 +226,88 @@ def test_ill_formed_hinges_are_refused_in_one_line(joints, words):
     ground = [FixedJoint("A0", [0.0, 0.0]), FixedJoint("B0", [4.0, 0.0])]
     with pytest.raises(InvalidLinkage, match=words):
         Linkage(joints=ground + joints)
+
+
+# --- on the sphere ----------------------------------------------------------------------------
+
+
+def _sphere_linkage(frame, crank, coupler, rocker, phase=0.0, assembly=1.0):
+    return Linkage(
+        joints=(
+            FixedJoint("A0", [1.0, 0.0, 0.0]),
+            FixedJoint("B0", [np.cos(frame), np.sin(frame), 0.0]),
+            HingeJoint("B", "A", "A0", crank, "B0", coupler, rocker, phase, assembly),
+        ),
+        traced="B",
+        space="sphere",
+    )
+
+
+arcs = st.floats(0.2, 1.4)
+
+
+@settings(max_examples=40, deadline=None)
+@given(frame=arcs, crank=arcs, coupler=arcs, rocker=arcs, phase=st.floats(-np.pi, np.pi))
+def test_every_spherical_pose_is_the_crank_driven_linkages(frame, crank, coupler, rocker, phase):
+    """Each pose against the crank-driven spherical linkage (SphereCrank and SphereDyad, another
+    code path) at the crank angle the pose has, and the angle at B against the input."""
+    hinge = _sphere_linkage(frame, crank, coupler, rocker, phase)
+    theta = np.linspace(-np.pi, np.pi, 37)
+    for _, motion in configurations(hinge, theta, order=0):
+        ok = motion.valid
+        if not ok.any():
+            continue
+        pos = {k: v[ok] for k, v in motion.positions.items()}
+        a, b, a0, b0 = pos["A"], pos["B"], pos["A0"], pos["B0"]
+        turn = sphere.angle_at(b, b0, a) - (theta[ok] + phase)
+        assert np.max(np.abs(np.remainder(turn + np.pi, 2 * np.pi) - np.pi)) <= 1e-9
+        crank_angle = sphere.angle_at(a0, b0, a)
+        side = np.sign(np.sum(np.cross(a, b0) * b, axis=-1))
+        for k in range(len(crank_angle)):
+            assume(side[k] != 0)
+            driven = Linkage(
+                joints=(
+                    FixedJoint("A0", [1.0, 0.0, 0.0]),
+                    FixedJoint("B0", [np.cos(frame), np.sin(frame), 0.0]),
+                    SphereCrankJoint("A", "A0", crank, toward="B0"),
+                    DyadJoint("B", "A", coupler, "B0", rocker, side[k]),
+                ),
+                traced="B",
+                space="sphere",
+            )
+            reached = solve(driven, [crank_angle[k]], order=0).positions["B"][0]
+            # The reference's dyad meets its limit where the angle at B is 0 or π.
+            sine = abs(np.sin(theta[ok][k] + phase))
+            assert np.linalg.norm(reached - b[k]) <= 1e-9 + 1e-14 / max(sine, 1e-300)
+
+
+def test_spherical_limits_are_the_spherical_law_of_cosines():
+    hinge = _sphere_linkage(np.radians(40), np.radians(20), np.radians(45), np.radians(35))
+    found = input_range(hinge)
+    a, b = np.radians(45), np.radians(35)
+    ends = [
+        np.arccos((np.cos(d) - np.cos(a) * np.cos(b)) / (np.sin(a) * np.sin(b)))
+        for d in np.radians([20.0, 60.0])
+    ]
+    expected = sorted([-ends[1], -ends[0], ends[0], ends[1]])
+    got = sorted(np.concatenate([found.lo[np.isfinite(found.lo)], found.hi[np.isfinite(found.hi)]]))
+    np.testing.assert_allclose(got, expected, atol=1e-12)
+
+
+@pytest.mark.parametrize("assembly", [1.0, -1.0])
+def test_spherical_derivatives_match_an_eighth_order_difference(assembly):
+    hinge = _sphere_linkage(0.7, 0.35, 0.8, 0.6, phase=0.2, assembly=assembly)
+    arcs_found = input_range(hinge)
+    lo, hi = float(arcs_found.lo[..., 1]), float(arcs_found.hi[..., 1])
+    theta = np.linspace(lo + 0.2 * (hi - lo), hi - 0.2 * (hi - lo), 7)
+    motion = solve(hinge, theta, order=2)
+    assert motion.valid.all() and motion.regular.all()
+    h = 1e-2 * (hi - lo)
+    w1 = np.array([1 / 280, -4 / 105, 1 / 5, -4 / 5, 0, 4 / 5, -1 / 5, 4 / 105, -1 / 280])
+    w2 = np.array([-1 / 560, 8 / 315, -1 / 5, 8 / 5, -205 / 72, 8 / 5, -1 / 5, 8 / 315, -1 / 560])
+    shifted = [solve(hinge, theta + k * h, order=0).positions for k in range(-4, 5)]
+    for j in "AB":
+        first = sum(w * p[j] for w, p in zip(w1, shifted, strict=True)) / h
+        second = sum(w * p[j] for w, p in zip(w2, shifted, strict=True)) / h**2
+        np.testing.assert_allclose(motion.velocities[j], first, atol=1e-8)
+        np.testing.assert_allclose(motion.accelerations[j], second, atol=1e-6)

@@ -21,8 +21,9 @@ from linkwright.engine.continuation import every_circuit, memo_key
 from linkwright.engine.limit_search import bisect_brackets
 from linkwright.engine.shared import share_arcs, share_samples
 from linkwright.io import document_to_dict, load_example
-from linkwright.server import scene as scene_mod
 from linkwright.server.scene import scene
+from linkwright.server.scene_io import fields, read_document, set_path
+from linkwright.server.scene_modes import assembly_modes
 
 
 def _forget() -> None:
@@ -76,8 +77,8 @@ def test_bisection_in_batches_takes_the_steps_one_at_a_time(brackets, wiggle) ->
 def _changed(name: str, rel: float = 3e-5) -> dict:
     """The example's document with its first length (or angle) changed: nothing kept applies."""
     doc = document_to_dict(load_example(name))
-    f = next(f for f in scene_mod.fields(doc) if f["kind"] in ("length", "angle"))
-    scene_mod._set(doc, f["path"], f["value"] * (1 + rel))
+    f = next(f for f in fields(doc) if f["kind"] in ("length", "angle"))
+    set_path(doc, f["path"], f["value"] * (1 + rel))
     return doc
 
 
@@ -113,8 +114,8 @@ def test_triad_scene_follows_its_configurations_once(monkeypatch) -> None:
 
 
 def _modes(name: str):
-    doc = scene_mod._parse(_changed(name, 7e-5))
-    return [variant.mechanism for _, _, variant, _ in scene_mod._variants(doc)]
+    doc = read_document(_changed(name, 7e-5))
+    return [variant.mechanism for _, _, variant, _ in assembly_modes(doc)]
 
 
 @pytest.mark.parametrize("name", ["paper000-fig8-sixbar", "stephenson1-example", "klann-leg"])

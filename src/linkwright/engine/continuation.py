@@ -32,7 +32,7 @@ import threading
 from collections import OrderedDict
 from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -92,7 +92,10 @@ class Memo:
         with self._lock:
             if key in self._items:
                 self._items.move_to_end(key)
-                return self._items[key]
+                # One memo holds several kinds of value, but a key names the call that made
+                # its value (the caller's tag and arguments are in it), so what is kept under
+                # ``key`` is what this caller's ``make`` returns.
+                return cast(T, self._items[key])
         value = make()
         with self._lock:
             self._items[key] = value
@@ -118,7 +121,9 @@ class Memo:
             self._items.clear()
 
 
-def memo_key(plan: Plan, params: Mapping[str, ArrayLike], points: frozenset[str], *more) -> Any:
+def memo_key(
+    plan: Plan, params: Mapping[str, ArrayLike], points: frozenset[str], *more: Hashable
+) -> Hashable | None:
     """A key naming one linkage's plan and numbers exactly (their bytes), or None where the
     batch is too large to keep or some value cannot be keyed."""
     items = []
@@ -276,6 +281,14 @@ class _Sample:
     valid: NDArray[np.bool_]
 
 
+_End = tuple[_Sample, int]
+"""A node: a sample and a combination's index in it (a branch ending or beginning there)."""
+_Join = tuple[_Sample, int, _Sample, int]
+"""Two nodes joined along a branch: (sample, combination) to (sample, combination)."""
+_Cycle = list[tuple[_Sample, int, str]]
+"""A closed cycle of nodes, each with how it was reached (a join or a turn)."""
+
+
 def _samples(solver: _Solver, theta: Array) -> list[_Sample]:
     x, label, valid = solver.solve(theta)
     return [_Sample(float(t), x[:, i], label[:, i], valid[:, i]) for i, t in enumerate(theta)]
@@ -351,10 +364,11 @@ def _join_all(
     np.put_along_axis(taken, partner[..., None], va[..., None], -1)
     onto = np.all(taken.sum(1) <= 1, -1)
 
-    def separation(x: NDArray, kin: NDArray) -> NDArray:
+    def separation(x: Array, kin: NDArray[np.bool_]) -> Array:
         d = np.max(np.abs(x[:, :, None, :] - x[:, None, :, :]), axis=-1)
         eye = np.eye(x.shape[1], dtype=bool)
-        return np.where(kin & ~eye, d, np.inf).min(-1)
+        nearest: Array = np.where(kin & ~eye, d, np.inf).min(-1)
+        return nearest
 
     sep_a = separation(xa, kin_a)
     sep_b = np.take_along_axis(separation(xb, kin_b), partner, -1)
@@ -386,7 +400,7 @@ END_INPUT = 1e-8
 END_DISTANCE = 1e-3
 
 
-def _pair_ends(ends: list[tuple[_Sample, int]]) -> list[tuple[tuple[_Sample, int], ...]]:
+def _pair_ends(ends: list[_End]) -> list[tuple[_End, _End]]:
     """Pair the branch ends of one kind (all ending, or all beginning) into limit positions:
     labels that differ in one step (the two poses merging), nearest first."""
     candidates = []
@@ -399,7 +413,7 @@ def _pair_ends(ends: list[tuple[_Sample, int]]) -> list[tuple[tuple[_Sample, int
         if d <= END_DISTANCE:
             candidates.append((d, (sa, i), (sb, j)))
     used: set[tuple[int, int]] = set()
-    pairs = []
+    pairs: list[tuple[_End, _End]] = []
     for _, u, v in sorted(candidates, key=lambda c: c[0]):
         ku, kv = (id(u[0]), u[1]), (id(v[0]), v[1])
         if ku not in used and kv not in used:
@@ -408,16 +422,18 @@ def _pair_ends(ends: list[tuple[_Sample, int]]) -> list[tuple[tuple[_Sample, int
     return pairs
 
 
-def _graph(solver: _Solver, grid: Array, period: float):
+def _graph(
+    solver: _Solver, grid: Array, period: float
+) -> tuple[_Sample, _Sample, list[_Join], list[tuple[_End, _End]]]:
     """Nodes (sample index, combination) and their joins over the whole period."""
     samples = _samples(solver, grid)
     wrap = _Sample(samples[0].theta + period, samples[0].x, samples[0].label, samples[0].valid)
     chain = [*samples, wrap]
     # Intervals still to resolve: (left sample, right sample), bisected in rounds.
     open_ = [(chain[i], chain[i + 1]) for i in range(len(chain) - 1)]
-    joins: list[tuple[_Sample, int, _Sample, int]] = []
-    deaths: list[tuple[_Sample, int]] = []
-    births: list[tuple[_Sample, int]] = []
+    joins: list[_Join] = []
+    deaths: list[_End] = []
+    births: list[_End] = []
     for _ in range(ROUNDS + 1):
         pending = []
         for (a, b), (pairs, clean) in zip(open_, _join_all(open_), strict=True):
@@ -428,8 +444,8 @@ def _graph(solver: _Solver, grid: Array, period: float):
                 # ending at a and another beginning at b.
                 pairs = [(i, j, d) for i, j, d in pairs if d <= JUMP]
                 joins += [(a, i, b, j) for i, j, _ in pairs]
-                left = set(np.flatnonzero(a.valid)) - {i for i, _, _ in pairs}
-                right = set(np.flatnonzero(b.valid)) - {j for _, j, _ in pairs}
+                left = {int(i) for i in np.flatnonzero(a.valid)} - {i for i, _, _ in pairs}
+                right = {int(j) for j in np.flatnonzero(b.valid)} - {j for _, j, _ in pairs}
                 deaths += [(a, i) for i in sorted(left)]
                 births += [(b, j) for j in sorted(right)]
             else:
@@ -444,8 +460,12 @@ def _graph(solver: _Solver, grid: Array, period: float):
 
 
 def _cycles(
-    first: _Sample, wrap: _Sample, joins, turns, period: float
-) -> list[list[tuple[_Sample, int, str]]]:
+    first: _Sample,
+    wrap: _Sample,
+    joins: list[_Join],
+    turns: list[tuple[_End, _End]],
+    period: float,
+) -> list[_Cycle]:
     """Walk the joins into closed cycles of (sample, combination, how it was reached)."""
 
     # A node is keyed by its sample object's id and combination; the wrap sample is the first.
@@ -621,7 +641,7 @@ _RESAMPLED = Memo()
 
 def _solved_cycles(
     plan: Plan, params: Mapping[str, ArrayLike], points: frozenset[str], period: float, grid: int
-) -> tuple[_Solver, list]:
+) -> tuple[_Solver, list[_Cycle]]:
     """The solver and the closed cycles of joins: all of :func:`every_circuit` that does not
     depend on the samples asked for (kept per linkage, :class:`Memo`)."""
     # The solver is kept and solves again later: on numbers of its own, which a caller that
@@ -637,7 +657,7 @@ def _solved_cycles(
     return solver, _cycles(first, wrap, joins, turns, period)
 
 
-def _unwrapped(cycle, period: float) -> tuple[Array, list[int]]:
+def _unwrapped(cycle: _Cycle, period: float) -> tuple[Array, list[int]]:
     """The inputs along a cycle, unwrapped to run continuously, and where it turns."""
     theta = np.array([s.theta for s, _, _ in cycle])
     turn_at = [k for k, (_, _, how) in enumerate(cycle) if how == "turn"]
@@ -651,7 +671,7 @@ def _unwrapped(cycle, period: float) -> tuple[Array, list[int]]:
 
 def _resample(
     solver: _Solver,
-    cycle,
+    cycle: _Cycle,
     samples: int,
     period: float,
     spacing: str = "input",

@@ -23,6 +23,7 @@ crosses it the same way (:mod:`linkwright.engine.continuation`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,9 +45,9 @@ from linkwright.engine.state import (
     param_value,
     word,
 )
-from linkwright.geometry import plane
+from linkwright.geometry import plane, sphere
 
-__all__ = ["Hinge"]
+__all__ = ["Hinge", "SphereHinge"]
 
 
 def _complex(v: Array) -> Array:
@@ -240,4 +241,237 @@ class Hinge:
         return (
             f"driven hinge {self.hinge}: {self.z}, {self.far} and {self.y} fall in line, where "
             f"the two places of {self.far} merge"
+        )
+
+
+def _hinge_turn(phi: Array, a: Array, b: Array) -> tuple[Array, Array, Array]:
+    """The angle β at Y of the spherical triangle H X Y (from Y→X to Y→H, right-handed about
+    +O·Y) and its first two derivatives by φ, the angle at H; |HX| = a, |HY| = b.
+
+    From the spherical laws of sines and cosines (sin β = sin a sin φ / sin d and
+    cos a = cos b cos d + sin b sin d cos β), both multiplied by sin b sin d > 0 and reduced
+    with cos d = cos a cos b + sin a sin b cos φ: β = atan2(S, C) with S = sin a sin φ and
+    C = cos a sin b − sin a cos b cos φ.
+    """
+    sa, ca, sb, cb = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
+    sp, cp = np.sin(phi), np.cos(phi)
+    s, c = sa * sp, ca * sb - sa * cb * cp
+    s1, c1 = sa * cp, sa * cb * sp
+    s2, c2 = -sa * sp, sa * cb * cp
+    num, den = s1 * c - s * c1, s * s + c * c
+    num1, den1 = s2 * c - s * c2, 2.0 * (s * s1 + c * c1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        beta1 = num / den
+        beta2 = (num1 * den - num * den1) / den**2
+    return np.arctan2(s, c), beta1, beta2
+
+
+@dataclass(frozen=True)
+class SphereHinge:
+    """The spherical hinge: joints ``hinge`` (H) and ``far`` (X) of a spherical linkage driven
+    at the hinge H, every joint an axis through the sphere's centre and every link an arc.
+
+    X lies at arc ``r`` from ``z``, H at arc ``a`` from X and ``b`` from ``y``, and the angle at
+    H from the great circle H→Y to H→X (right-handed about +O·H) is ``phase + θ``. By the
+    spherical law of cosines the arc X Y is d(φ), cos d = cos a cos b + sin a sin b cos φ, so X
+    is where the small circles about Z (arc r) and Y (arc d) meet, on the side ``pose`` (0 or
+    1: ``sign((Z × Y)·X)`` −1 or +1), and H sits at arc b from Y, turned by the triangle's angle
+    β at Y from the great circle Y→X (:func:`_hinge_turn`): smooth through φ = 0 and π.
+
+    Examples
+    --------
+    A spherical four-bar driven at its coupler–rocker hinge B; every arc is kept, and so is the
+    angle at B:
+
+    >>> from linkwright.engine import Fixed, Plan, evaluate
+    >>> from linkwright.geometry import sphere
+    >>> plan = Plan((Fixed("A0", "A0"), Fixed("B0", "B0"),
+    ...              SphereHinge("B", "A", "A0", 0.4, "B0", 0.9, 0.7)), traced=("B",))
+    >>> b0 = np.array([np.cos(0.8), np.sin(0.8), 0.0])
+    >>> m = evaluate(plan, {"A0": [1.0, 0.0, 0.0], "B0": b0}, np.array([1.2]),
+    ...              points=frozenset({"A0", "B0"}), branches={"B": 1.0})
+    >>> p = {k: v[0] for k, v in m.positions.items()}
+    >>> [round(float(sphere.arc(p[i], p[j])), 12) for i, j in (("A0", "A"), ("A", "B"),
+    ...                                                         ("B", "B0"))]
+    [0.4, 0.9, 0.7]
+    >>> round(float(sphere.angle_at(p["B"], p["B0"], p["A"])), 12)
+    1.2
+    """
+
+    hinge: str
+    far: str
+    z: str
+    r: Param
+    y: str
+    a: Param
+    b: Param
+    phase: Param = 0.0
+    pose: str = "pose"
+
+    max_poses = 2
+    space = "sphere"
+
+    @property
+    def name(self) -> str:
+        return self.hinge
+
+    @property
+    def joints(self) -> tuple[str, str]:
+        return (self.hinge, self.far)
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys((self.z, self.y)))
+
+    @property
+    def title(self) -> str:
+        return f"driven hinge {self.hinge}"
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        return ((self.z, self.far), (self.far, self.hinge), (self.hinge, self.y))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        return ()
+
+    def place(self, ctx: Context) -> dict[str, JointState]:
+        jz, jy = ctx.joint(self.z), ctx.joint(self.y)
+        r, a, b = ctx.scalar(self.r), ctx.scalar(self.a), ctx.scalar(self.b)
+        phi = ctx.scalar(self.phase) + ctx.theta
+        sa, sb = np.sin(a), np.sin(b)
+        cos_d = np.clip(np.cos(a) * np.cos(b) + sa * sb * np.cos(phi), -1.0, 1.0)
+        d = np.arccos(cos_d)
+        asked = np.asarray(ctx.branch(self.name, self.pose), dtype=float)
+        usable = np.where(np.isfinite(asked), asked, 0.0)
+        index = np.clip(np.rint(usable), 0, 1)
+        sign = np.where(index == 1, 1.0, -1.0)
+        z, y = jz.pos, jy.pos
+        meet = sphere.small_circles(z, r, y, d, sign, tol=ASSEMBLY_TOL)
+        valid = jz.valid & jy.valid & meet.valid & (asked == index) & (np.sin(d) > 0)
+        x = np.where(valid[..., None], meet.point, np.nan)
+        beta, beta1, beta2 = _hinge_turn(phi, a, b)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c = sphere.dot(x, y)
+            s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+            u = x - c[..., None] * y
+            t = u / s[..., None]
+            n = sphere.cross(y, t)
+            cb, sbt, cbt = np.cos(b)[..., None], np.sin(b)[..., None], np.cos(beta)[..., None]
+            sbeta = np.sin(beta)[..., None]
+            h = cb * y + sbt * (cbt * t + sbeta * n)
+            span = sphere.norm(sphere.cross(z, y))
+            closure = sphere.dot(sphere.cross(z, y), x) / (span * np.sin(r))
+        regular = valid & jz.regular & jy.regular & (np.abs(closure) > SINGULAR_SIN)
+        vel_x = vel_h = acc_x = acc_h = None
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            zero = np.zeros(x.shape[:-1])
+            if ctx.order >= 1:
+                vz, vy = derivative(jz.vel), derivative(jy.vel)
+                sin_term = sa * sb * np.sin(phi)  # −(cos d)′
+                vel_x, _ = sphere.solve_3x3_rows(
+                    z, y, x, -sphere.dot(x, vz), -sphere.dot(x, vy) - sin_term, zero
+                )
+                c1 = sphere.dot(vel_x, y) + sphere.dot(x, vy)
+                s1 = -c * c1 / s
+                u1 = vel_x - c1[..., None] * y - c[..., None] * vy
+                t1 = u1 / s[..., None] - u * (s1 / s**2)[..., None]
+                n1 = sphere.cross(vy, t) + sphere.cross(y, t1)
+                b1 = beta1[..., None]
+                vel_h = cb * vy + sbt * (-sbeta * b1 * t + cbt * t1 + cbt * b1 * n + sbeta * n1)
+            if ctx.order >= 2:
+                assert vel_x is not None
+                az, ay = derivative(jz.acc), derivative(jy.acc)
+                acc_x, _ = sphere.solve_3x3_rows(
+                    z,
+                    y,
+                    x,
+                    -2.0 * sphere.dot(vel_x, vz) - sphere.dot(x, az),
+                    -2.0 * sphere.dot(vel_x, vy) - sphere.dot(x, ay) - sa * sb * np.cos(phi),
+                    -sphere.dot(vel_x, vel_x),
+                )
+                c2 = sphere.dot(acc_x, y) + 2.0 * sphere.dot(vel_x, vy) + sphere.dot(x, ay)
+                s2 = -(c1 * c1 + c * c2) / s - c * c * c1 * c1 / s**3
+                u2 = acc_x - c2[..., None] * y - 2.0 * c1[..., None] * vy - c[..., None] * ay
+                t2 = (
+                    u2 / s[..., None]
+                    - 2.0 * u1 * (s1 / s**2)[..., None]
+                    - u * (s2 / s**2)[..., None]
+                    + 2.0 * u * (s1 * s1 / s**3)[..., None]
+                )
+                n2 = sphere.cross(ay, t) + 2.0 * sphere.cross(vy, t1) + sphere.cross(y, t2)
+                b2 = beta2[..., None]
+                acc_h = cb * ay + sbt * (
+                    -cbt * b1 * b1 * t
+                    - sbeta * b2 * t
+                    - 2.0 * sbeta * b1 * t1
+                    + cbt * t2
+                    - sbeta * b1 * b1 * n
+                    + cbt * b2 * n
+                    + 2.0 * cbt * b1 * n1
+                    + sbeta * n2
+                )
+        label = np.where(closure >= 0, 1.0, -1.0)
+        states = {}
+        for name, pos, vel, acc in ((self.hinge, h, vel_h, acc_h), (self.far, x, vel_x, acc_x)):
+            vel, acc = mask_derivatives(vel, acc, regular)
+            states[name] = JointState(
+                np.where(valid[..., None], pos, np.nan),
+                vel,
+                acc,
+                valid,
+                regular,
+                margin=closure,
+                branch=asked,
+                label=label,
+            )
+        return states
+
+    def closure(self, positions: Positions, params: Params) -> Array:
+        """sin of the angle at Z between the great circles Z→Y and Z→X: 0 where X's two poses
+        merge (X on the great circle Z Y), its sign the pose's side."""
+        z, y, x = positions[self.z], positions[self.y], positions[self.far]
+        r = param_value(self.r, params)
+        w = sphere.cross(z, y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            value: Array = sphere.dot(w, x) / (sphere.norm(w) * np.sin(r))
+        return value
+
+    def residual(self, positions: Positions, params: Params, theta: ArrayLike) -> Array:
+        """The largest error of the three arcs, of the angle at H (times sin a: the arc X is
+        off along its circle about H) and of the joints' unit norms, in radians."""
+        z, y = positions[self.z], positions[self.y]
+        x, h = positions[self.far], positions[self.hinge]
+        r, a, b = (param_value(p, params) for p in (self.r, self.a, self.b))
+        phi = param_value(self.phase, params) + np.asarray(theta, dtype=float)
+        turned = sphere.angle_at(h, y, x) - phi
+        wrapped = np.remainder(turned + np.pi, 2.0 * np.pi) - np.pi
+        errors = (
+            np.abs(sphere.arc(z, x) - r),
+            np.abs(sphere.arc(x, h) - a),
+            np.abs(sphere.arc(y, h) - b),
+            np.abs(wrapped) * np.sin(a),
+            np.abs(sphere.norm(x) - 1.0),
+            np.abs(sphere.norm(h) - 1.0),
+        )
+        worst: Array = np.maximum.reduce(np.broadcast_arrays(*errors))
+        return worst
+
+    def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
+        h, x, z, y = self.hinge, self.far, self.z, self.y
+        if positions is None or params is None:
+            return (
+                f"driven hinge {h}: at this angle {x} is too far from {y} (or too near) for the "
+                f"arc {z}{x} to reach"
+            )
+        span = math.degrees(first(sphere.arc(positions[y], positions[z])))
+        r = math.degrees(number(self.r, params))
+        return (
+            f"driven hinge {h}: {x} must lie at {word(self.r)} = {r:.6g}° from {z} and at the arc "
+            f"the angle at {h} sets from {y}, but arc {z}{y} = {span:.6g}° leaves no such point "
+            "at this input"
+        )
+
+    def at_limit(self) -> str:
+        return (
+            f"driven hinge {self.hinge}: {self.far} falls on the great circle {self.z}{self.y}, "
+            f"where its two places merge"
         )

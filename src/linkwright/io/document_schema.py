@@ -304,6 +304,16 @@ SPHERE_JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
         FieldSpec("arc", "offset_arc", default=0.0),
         FieldSpec("angle", "angle_deg", default=0.0),
     ),
+    "hinge": (
+        FieldSpec("far", "joint"),
+        FieldSpec("z", "joint"),
+        FieldSpec("r", "arc"),
+        FieldSpec("y", "joint"),
+        FieldSpec("a", "arc"),
+        FieldSpec("b", "arc"),
+        FieldSpec("phase", "angle_deg", default=0.0),
+        FieldSpec("assembly", "sign", default=1),
+    ),
 }
 """A spherical ``linkage`` joint's fields by its ``type`` (``space = "sphere"``): arcs and angles
 in degrees, a fixed joint's ``at`` an axis [x, y, z]; the names are those of

@@ -35,6 +35,8 @@ DyadJoint         ``rrr``     the pin of two binary links: the small circles of 
                               p1 and r2 about p2 meet
 SphereRigidJoint  ``rigid``   a point at arc ``arc`` from ``origin``, at ``angle`` from the
                               great circle origin→toward (right-handed about +O·origin)
+HingeJoint        ``hinge``   as in the plane, its lengths arcs and the angle at H between
+                              great circles, right-handed about +O·H
 ================  ==========  ==================================================================
 
 A slider has no spherical counterpart of its own: a pin whose guide is a great circle is an
@@ -443,7 +445,7 @@ JOINT_TYPES: dict[str, type[Joint]] = {
 """Document ``type`` → joint spec class, in the plane."""
 
 SPHERE_JOINT_TYPES: dict[str, type[Joint]] = {
-    cls.type: cls for cls in (FixedJoint, SphereCrankJoint, DyadJoint, SphereRigidJoint)
+    cls.type: cls for cls in (FixedJoint, SphereCrankJoint, DyadJoint, SphereRigidJoint, HingeJoint)
 }
 """Document ``type`` → joint spec class, on the sphere (no ``rrp``: see the module notes)."""
 

@@ -51,7 +51,7 @@ from linkwright.engine import (
     SphereRigid,
 )
 from linkwright.engine.evaluate import batch_shape
-from linkwright.engine.hinge_steps import Hinge
+from linkwright.engine.hinge_steps import Hinge, SphereHinge
 from linkwright.geometry import plane, sphere
 from linkwright.mechanisms.base import Mechanism, family_dataclass
 from linkwright.mechanisms.joints import (
@@ -372,7 +372,7 @@ about the guide's pole; write that DyadJoint instead
                 "nothing drives the linkage: none of its joints is a crank or a driven hinge "
                 "(under-constrained)"
             )
-        cranks = [k for k, j in enumerate(out) if isinstance(j, CrankJoint)]
+        cranks = [k for k, j in enumerate(out) if isinstance(j, CrankJoint | SphereCrankJoint)]
         if hinges and (cranks or len(hinges) > 1):
             k = (cranks + hinges[1:])[0]
             raise InvalidLinkage(
@@ -608,6 +608,15 @@ about the guide's pole; write that DyadJoint instead
                 o, t = pos[j.origin], pos[j.toward]
                 place = sphere.point_at(o, t, per_sample(j.arc), per_sample(j.angle))
                 out[f"{n}.point"] = sphere.arc(pos[n], place)
+            elif isinstance(j, HingeJoint):
+                out[f"{j.far}.r"] = arc_error(j.z, j.far, j.r)
+                out[f"{n}.a"] = arc_error(j.far, n, j.a)
+                out[f"{n}.b"] = arc_error(j.y, n, j.b)
+                turned = sphere.angle_at(pos[n], pos[j.y], pos[j.far]) - (
+                    per_sample(j.phase) + motion.input
+                )
+                wrapped = np.remainder(turned + np.pi, 2 * np.pi) - np.pi
+                out[f"{n}.angle"] = wrapped * np.sin(per_sample(j.a))
         out["unit"] = np.maximum.reduce([np.abs(sphere.norm(p) - 1.0) for p in pos.values()])
         return out
 
@@ -660,8 +669,9 @@ def _compile(
         elif isinstance(j, HingeJoint):
             # The step's branch is a pose index: 0 for the assembly sign −1, 1 for +1.
             params[f"{n}.pose"] = (np.asarray(j.assembly, dtype=float) + 1.0) / 2.0
+            kind = SphereHinge if space == "sphere" else Hinge
             steps.append(
-                Hinge(n, j.far, j.z, key("r"), j.y, key("a"), key("b"), key("phase"), f"{n}.pose")
+                kind(n, j.far, j.z, key("r"), j.y, key("a"), key("b"), key("phase"), f"{n}.pose")
             )
         else:
             steps.append(Rigid(n, j.origin, j.toward, key("u"), key("v")))

@@ -55,7 +55,7 @@ from linkwright.engine import (
     SphereRigid,
     Trammel,
 )
-from linkwright.engine.hinge_steps import Hinge
+from linkwright.engine.hinge_steps import Hinge, SphereHinge
 from linkwright.engine.triad_steps import SphereTriad, Triad
 from linkwright.mechanisms.base import Mechanism
 
@@ -95,6 +95,7 @@ ROLES: tuple[tuple[type, dict[str, str]], ...] = (
     ),
     # A driven hinge's phase is an angle between two links: the linkage's turn leaves it.
     (Hinge, {"r": "length", "a": "length", "b": "length", "phase": "angle", "pose": "branch"}),
+    (SphereHinge, {"r": "arc", "a": "arc", "b": "arc", "phase": "angle", "pose": "branch"}),
     (SphereCrank, {"length": "arc", "ref": "axis", "ratio": "ratio", "phase": "angle"}),
     (SphereDyad, {"r1": "arc", "r2": "arc", "branch": "branch"}),
     (SphereRigid, {"length": "closed-arc", "angle": "angle"}),
