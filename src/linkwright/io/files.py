@@ -225,6 +225,14 @@ def load_example(name: str) -> Document:
     --------
     >>> load_example("double-crank").family
     'fourbar'
+
+    An unknown name is refused with the nearest one:
+
+    >>> load_example("crank-rockr")
+    Traceback (most recent call last):
+    ...
+    linkwright.io.documents.DocumentError: example: unknown example 'crank-rockr' (did you \
+mean 'crank-rocker'?)
     """
     stem = name.removesuffix(".toml")
     known = tuple(list_examples())

@@ -173,6 +173,14 @@ class FixedJoint(_Spec):
     >>> arm = [CrankJoint("A", "O", 1.0), DyadJoint("B", "A", 3.0, "B0", 2.0)]
     >>> solve(Linkage(joints=ground + arm), [0.0]).positions["O"].tolist()
     [[0.0, 0.0]]
+
+    A name used twice is refused, naming both places:
+
+    >>> Linkage(joints=ground + [FixedJoint("O", [1, 1])] + arm)
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.linkage.InvalidLinkage: joint 'O' is listed twice (joints[0] and \
+joints[2]); each joint needs its own name
     """
 
     name: str
@@ -197,6 +205,14 @@ class CrankJoint(_Spec):
     >>> joints = [FixedJoint("O", [0, 0]), CrankJoint("A", "O", 2.0, phase=0.5)]
     >>> solve(Linkage(joints=joints), [0.0]).positions["A"].round(6).tolist()
     [[1.755165, 0.958851]]
+
+    A crank about a joint that is not placed before it is refused:
+
+    >>> Linkage(joints=[CrankJoint("A", "O", 2.0), FixedJoint("O", [0, 0])])
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.linkage.InvalidLinkage: joint 'A' is built from 'O', which is not placed \
+before it (it is listed after it; under-constrained)
     """
 
     name: str
@@ -271,6 +287,15 @@ class HingeJoint(_Spec):
     >>> m = solve(hinge, [np.pi / 2])
     >>> float(np.hypot(*m.positions["A"][0]).round(12)), bool(m.valid[0])
     (1.0, True)
+
+    A hinge is the linkage's one input: a crank beside it is refused:
+
+    >>> Linkage(joints=[FixedJoint("A0", [0, 0]), FixedJoint("B0", [4, 0]),
+    ...                 HingeJoint("B", "A", "A0", 1.0, "B0", 3.5, 3.0),
+    ...                 CrankJoint("C", "A0", 1.0)])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.linkage.InvalidLinkage: joint 'C': the hinge 'B' already drives the ...
     """
 
     name: str
@@ -309,6 +334,12 @@ class SliderJoint(_Spec):
     ...           CrankJoint("A", "O", 1.0), SliderJoint("B", "A", 2.5, "G", 0.0)]
     >>> solve(Linkage(joints=joints), [0.0]).positions["B"].round(6).tolist()
     [[3.44949, -0.5]]
+
+    A rod too short to reach its guide leaves the slider unassembled there:
+
+    >>> short = joints[:3] + [SliderJoint("B", "A", 0.2, "G", 0.0)]
+    >>> bool(solve(Linkage(joints=short), [0.0]).valid[0])
+    False
     """
 
     name: str
@@ -338,6 +369,15 @@ class RigidJoint(_Spec):
     ...           RigidJoint("P", "O", "A", u=2.0, v=0.0)]
     >>> solve(Linkage(joints=joints), [0.0]).positions["P"].tolist()
     [[2.0, 0.0]]
+
+    A point fixed on two joints of different links is refused (their distance changes):
+
+    >>> two = [FixedJoint("O", [0, 0]), FixedJoint("Q", [3, 0]), CrankJoint("A", "O", 1.0),
+    ...        RigidJoint("P", "Q", "A", u=1.0, v=0.0)]
+    >>> Linkage(joints=two)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.linkage.InvalidLinkage: joint 'P' is fixed on the link 'Q'→'A', but ...
     """
 
     name: str
@@ -375,6 +415,14 @@ class SphereCrankJoint(_Spec):
     >>> A = solve(Linkage(joints=joints, space="sphere"), [0.3]).positions["A"][0]
     >>> bool(np.allclose(A, [np.cos(0.4), np.sin(0.4) * np.cos(0.3), np.sin(0.4) * np.sin(0.3)]))
     True
+
+    Its pivot must be a fixed joint: a crank about a moving one is refused:
+
+    >>> Linkage(joints=joints + [SphereCrankJoint("C", "A", 0.2, toward="B0")],
+    ...         space="sphere")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.linkage.InvalidLinkage: ...
     """
 
     name: str
@@ -411,6 +459,14 @@ class SphereRigidJoint(_Spec):
     >>> p = solve(Linkage(joints=joints, space="sphere"), [0.3]).positions
     >>> round(float(np.arccos(p["A"][0] @ p["C"][0])), 12)
     0.5
+
+    On two joints that are not on one link it is refused:
+
+    >>> Linkage(joints=joints[:3] + [SphereRigidJoint("C", "A", "B0", arc=0.5)],
+    ...         space="sphere")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.linkage.InvalidLinkage: joint 'C' is fixed on the link 'A'→'B0', but ...
     """
 
     name: str

@@ -215,6 +215,13 @@ class GearedFiveBar(Mechanism):
 
     At θ1 = 90°, A = (0, 1) and θ2 = −90° puts B at (4, −1); C is 3 from both, on the left of
     A→B: the midpoint (2, 0) plus √(9 − 5) = 2 along the unit normal (2, 4)/√20.
+
+    A member whose frame pivots lie too far apart for its links assembles nowhere, and says so:
+
+    >>> from dataclasses import replace
+    >>> from linkwright.mechanisms import input_range
+    >>> bool(input_range(replace(m, B0=[40.0, 0.0])).never)
+    True
     """
 
     A0: Dimension
@@ -348,6 +355,14 @@ class DoubleSlider(Mechanism):
     >>> solve(m, [0.0, np.pi / 2]).positions["P"].round(12) + 0.0
     array([[-3.,  0.],
            [ 0.,  1.]])
+
+    Parallel guides make no trammel: refused, with the reason:
+
+    >>> DoubleSlider(M=[0, 0], alpha=0.0, beta=0.0, p=3, q=1)
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.base.InvalidMechanism: alpha: must not be a multiple of 180° (the slider \
+lines would be parallel)
     """
 
     M: Dimension

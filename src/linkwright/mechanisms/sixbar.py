@@ -271,6 +271,13 @@ class Watt1(SixBar):
     >>> at = solve(m, [0.0]).positions
     >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "E", "D", "P")}
     {'C': [1.0, 1.0], 'E': [1.0, 5.0], 'D': [-2.0, 1.0], 'P': [-0.5, 2.0]}
+
+    A member whose frame pivots lie too far apart for its links assembles nowhere, and says so:
+
+    >>> from dataclasses import replace
+    >>> from linkwright.mechanisms import input_range
+    >>> bool(input_range(replace(m, B0=[40.0, 0.0])).never)
+    True
     """
 
     A0: Dimension
@@ -361,6 +368,13 @@ class Watt2(SixBar):
     >>> at = solve(m, [0.0]).positions
     >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "D", "P")}
     {'C': [2.0, 4.0], 'D': [5.0, 4.0], 'P': [3.5, 5.0]}
+
+    A member whose frame pivots lie too far apart for its links assembles nowhere, and says so:
+
+    >>> from dataclasses import replace
+    >>> from linkwright.mechanisms import input_range
+    >>> bool(input_range(replace(m, B0=[40.0, 0.0])).never)
+    True
     """
 
     A0: Dimension
@@ -449,6 +463,13 @@ class Stephenson1(SixBar):
     >>> at = solve(m, [0.0]).positions
     >>> {k: (at[k][0].round(12) + 0).tolist() for k in ("C", "E", "D", "P")}
     {'C': [1.0, -1.0], 'E': [5.0, 5.0], 'D': [5.0, -1.0], 'P': [3.0, 0.0]}
+
+    A member whose frame pivots lie too far apart for its links assembles nowhere, and says so:
+
+    >>> from dataclasses import replace
+    >>> from linkwright.mechanisms import input_range
+    >>> bool(input_range(replace(m, B0=[40.0, 0.0])).never)
+    True
     """
 
     A0: Dimension
@@ -562,6 +583,13 @@ class Stephenson3(SixBar):
     >>> [bool(motion.valid[0]) for _, motion in found]
     [True, True, False, False, False, False]
     >>> bool(max(np.max(np.abs(r)) for r in driven.residuals(found[1][1]).values()) < 1e-12)
+    True
+
+    A member whose frame pivots lie too far apart for its links assembles nowhere, and says so:
+
+    >>> from dataclasses import replace
+    >>> from linkwright.mechanisms import input_range
+    >>> bool(input_range(replace(m, B0=[40.0, 0.0])).never)
     True
     """
 

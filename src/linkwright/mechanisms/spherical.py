@@ -294,6 +294,14 @@ class SphericalStephenson3(Mechanism):
     >>> found = configurations(fg, d([-90, 0, 120]))
     >>> sum(motion.valid.astype(int) for _, motion in found).tolist()
     [8, 4, 6]
+
+    With an arc a7 of 175° the linkage driven at AB assembles nowhere:
+
+    >>> from dataclasses import replace
+    >>> from linkwright import input_range
+    >>> ab = replace(fg, input="AB")
+    >>> bool(input_range(ab).never), bool(input_range(replace(ab, a7=d(175))).never)
+    (False, True)
     """
 
     a1: Dimension
