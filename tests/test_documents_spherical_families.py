@@ -115,7 +115,11 @@ def test_schema_rows_build_exactly_the_class_fields(family):
 
 
 def test_sphere_joint_schema_covers_the_sphere_joint_classes():
-    assert set(SPHERE_JOINT_SPECS) == set(SPHERE_JOINT_TYPES) == {"fixed", "crank", "rrr", "rigid"}
+    assert (
+        set(SPHERE_JOINT_SPECS)
+        == set(SPHERE_JOINT_TYPES)
+        == {"fixed", "crank", "rrr", "rigid", "hinge"}
+    )
     for kind, specs in SPHERE_JOINT_SPECS.items():
         names = {f.name for f in dataclasses.fields(SPHERE_JOINT_TYPES[kind])} - {"name"}
         assert {t for f in specs for t in f.targets} == names, kind
