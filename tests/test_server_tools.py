@@ -658,3 +658,13 @@ def test_study_any_fourbar(client, crank, coupler, rocker, frame, u, v, heading,
             root_eps = math.sqrt(np.finfo(float).eps)
             tol = max(1e-7, 4 * root_eps * max(coupler, rocker) / coupler * lever)
             assert _fourbar_points_ok(mech, P, tol=tol).all()
+
+
+@pytest.mark.parametrize("path", ["/api/match", "/api/ellipse"])
+def test_true_and_false_are_not_coordinates(client: TestClient, path: str) -> None:
+    """The schema says drawn points are numbers; JSON's booleans were read as 1.0 and 0.0 and
+    accepted (a schema fuzzer found it). They are refused, naming the row."""
+    body = {"points": [[True, False]] + [[math.cos(t), math.sin(t)] for t in range(11)]}
+    r = client.post(path, json={**body, "refine": False} if path.endswith("match") else body)
+    assert r.status_code == 422
+    assert "points.0.0" in r.json()["error"]

@@ -159,8 +159,13 @@ def test_input_limits_match_the_engine_and_close_the_dyad(a1, a2, a3, a4):
     if ours.full or ours.never:
         return
     lo, hi = ours.lo[np.isfinite(ours.lo)], ours.hi[np.isfinite(ours.hi)]
-    np.testing.assert_allclose(lo, engine.lo[np.isfinite(engine.lo)], atol=1e-9)
-    np.testing.assert_allclose(hi, engine.hi[np.isfinite(engine.hi)], atol=1e-9)
+    # Where the input rocks over a sliver the two limits nearly merge (a double root of the
+    # closure), and each is only defined to about √ε of the linkage (seen: an arc of 1e-7
+    # rad whose ends two correct searches put 3e-8 apart); elsewhere to 1e-9. The Gram check
+    # below holds every end to 1e-9 regardless.
+    tol = np.where(hi - lo < 1e-5, 1e-6, 1e-9)
+    assert np.all(np.abs(lo - engine.lo[np.isfinite(engine.lo)]) <= tol)
+    assert np.all(np.abs(hi - engine.hi[np.isfinite(engine.hi)]) <= tol)
     # At a limit the arc A B0 is |α2 − α3| or α2 + α3 (mod the sphere): the spherical triangle
     # A B B0 is flat, its Gram determinant 0.
     ends = np.concatenate((lo, hi))

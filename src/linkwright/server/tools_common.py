@@ -20,7 +20,7 @@ from typing import Annotated, Any
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import WithJsonSchema
+from pydantic import Strict, WithJsonSchema
 
 from linkwright.io import Document, parse_document
 from linkwright.io.documents import WORKING_RANGE
@@ -76,7 +76,9 @@ _POINTS_SCHEMA = WithJsonSchema(
 )
 
 
-Points = Annotated[list[list[float]], _POINTS_SCHEMA]
+# Strict numbers: JSON's true is not a coordinate (lax parsing read it as 1.0, accepting what
+# the schema refuses); integers still are.
+Points = Annotated[list[list[Annotated[float, Strict()]]], _POINTS_SCHEMA]
 
 
 def json_number(x: Any) -> float | None:
