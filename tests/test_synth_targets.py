@@ -79,6 +79,14 @@ def sampled_gamma(fb, samples: int = 20001) -> np.ndarray:
     return np.arccos(np.clip(cos, -1.0, 1.0))
 
 
+def grid_slack(values: np.ndarray) -> float:
+    """How far a periodic sampling's min and max may each miss the true extremes, summed: a
+    sampled extreme is off by up to f″(h/2)²/2 = Δ²f/8 (Δ²f the second difference at the
+    extreme sample); twice that at each. A fixed 1e-6 failed where the curve bends sharply."""
+    d2 = np.abs(np.roll(values, -1) - 2 * values + np.roll(values, 1))
+    return float(0.25 * (d2[np.argmin(values)] + d2[np.argmax(values)]))
+
+
 def input_turns(fb, samples: int = 4096) -> bool:
     """Whether the linkage assembles at every sampled input (the engine, not the closed forms)."""
     theta = np.linspace(0.0, 2 * np.pi, samples, endpoint=False)
@@ -485,7 +493,7 @@ def test_planar_completion_puts_A0_and_B_on_thales_circle(p, q, r, field):
         assert np.linalg.norm(pos["B"][0] - centre) == pytest.approx(radius, abs=1e-9 * scale)
     # And the sampled transmission angle swings symmetrically about 90°.
     g = sampled_gamma(done)
-    assert g.min() + g.max() == pytest.approx(np.pi, abs=1e-6)
+    assert g.min() + g.max() == pytest.approx(np.pi, abs=1e-9 + grid_slack(g))
     assert abs(float(reinsberg_defect(done))) < 1e-9
 
 
@@ -519,7 +527,7 @@ def test_spherical_completion_has_a_right_angle_at_B_at_90_degrees(p, q, r, fiel
             np.pi / 2, abs=1e-9
         )
     g = sampled_gamma(done)
-    assert g.min() + g.max() == pytest.approx(np.pi, abs=1e-6)
+    assert g.min() + g.max() == pytest.approx(np.pi, abs=1e-9 + grid_slack(g))
     assert abs(float(reinsberg_defect(done))) < 1e-9
 
 
@@ -534,12 +542,8 @@ def test_defect_is_the_sampled_extremes_sum_minus_180(a1, a2, a3, a4):
         return
     assume(not math.isnan(defect))  # a change point counted either way
     g = sampled_gamma(fb)
-    # The sampled extremes miss the true ones by up to γ″(h/2)²/2 = Δ²γ/8 (Δ²γ the second
-    # difference at the extreme sample): a fixed 1e-6 failed where γ bends sharply near a
-    # change point (Δ²γ ~ 2e-6). Twice that bound, at each extreme, is what the grid can meet.
-    d2 = np.abs(np.roll(g, -1) - 2 * g + np.roll(g, 1))
-    grid = 0.25 * (d2[np.argmin(g)] + d2[np.argmax(g)])
-    assert defect == pytest.approx(g.min() + g.max() - np.pi, abs=1e-9 + grid)
+    # (seen: 1e-6 missed by 2e-8 where γ bends sharply near a change point)
+    assert defect == pytest.approx(g.min() + g.max() - np.pi, abs=1e-9 + grid_slack(g))
 
 
 def test_paper003_table4_is_reinsbergs():
