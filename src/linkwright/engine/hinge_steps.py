@@ -27,7 +27,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine.state import (
     ASSEMBLY_TOL,
@@ -40,9 +40,10 @@ from linkwright.engine.state import (
     Positions,
     derivative,
     first,
-    mask_derivatives,
     number,
     param_value,
+    pose_slot,
+    pose_states,
     word,
 )
 from linkwright.geometry import plane, sphere
@@ -60,7 +61,76 @@ def _vector(c: Array) -> Array:
 
 
 @dataclass(frozen=True)
-class Hinge:
+class _HingeStep:
+    """What the planar and the spherical hinge share: their fields (see :class:`Hinge`), how
+    they name, draw and index their two poses, and how they hand back their joints' states."""
+
+    hinge: str
+    far: str
+    z: str
+    r: Param
+    y: str
+    a: Param
+    b: Param
+    phase: Param = 0.0
+    pose: str = "pose"
+
+    max_poses = 2
+
+    @property
+    def name(self) -> str:
+        """The step's name, under which its pose index is kept: the hinge."""
+        return self.hinge
+
+    @property
+    def joints(self) -> tuple[str, str]:
+        return (self.hinge, self.far)
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys((self.z, self.y)))
+
+    @property
+    def title(self) -> str:
+        return f"driven hinge {self.hinge}"
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The three binary links: Z–X, X–H and H–Y."""
+        return ((self.z, self.far), (self.far, self.hinge), (self.hinge, self.y))
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        return ()
+
+    def _side(self, ctx: Context) -> tuple[Array, Array, NDArray[np.bool_]]:
+        """X's side asked for (the dyad sign of pose 0 is −1, of pose 1 +1), the pose as
+        given, and where it names a pose at all."""
+        index, asked = pose_slot(ctx, self.name, self.pose, self.max_poses)
+        return np.where(index == 1, 1.0, -1.0), asked, asked == index
+
+    def _states(
+        self,
+        h: Array,
+        x: Array,
+        rates: tuple[Array | None, Array | None, Array | None, Array | None],
+        valid: NDArray[np.bool_],
+        regular: NDArray[np.bool_],
+        closure: Array,
+        asked: Array,
+    ) -> dict[str, JointState]:
+        """The hinge's and X's states, from their positions and (vel_h, acc_h, vel_x,
+        acc_x)."""
+        vel_h, acc_h, vel_x, acc_x = rates
+
+        def both(u: Array | None, v: Array | None) -> Array | None:
+            return None if u is None or v is None else np.stack((u, v), axis=-2)
+
+        pos = np.stack((h, x), axis=-2)
+        vel, acc = both(vel_h, vel_x), both(acc_h, acc_x)
+        return pose_states(self.joints, pos, vel, acc, valid, regular, closure, asked)
+
+
+@dataclass(frozen=True)
+class Hinge(_HingeStep):
     """Joints ``hinge`` (H) and ``far`` (X) of a linkage driven at the hinge H.
 
     X lies at ``r`` from ``z`` and H at ``a`` from X and ``b`` from ``y``; the angle at H from
@@ -93,42 +163,7 @@ class Hinge:
     False
     """
 
-    hinge: str
-    far: str
-    z: str
-    r: Param
-    y: str
-    a: Param
-    b: Param
-    phase: Param = 0.0
-    pose: str = "pose"
-
-    max_poses = 2
     space = "plane"
-
-    @property
-    def name(self) -> str:
-        """The step's name, under which its pose index is kept: the hinge."""
-        return self.hinge
-
-    @property
-    def joints(self) -> tuple[str, str]:
-        return (self.hinge, self.far)
-
-    @property
-    def parents(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys((self.z, self.y)))
-
-    @property
-    def title(self) -> str:
-        return f"driven hinge {self.hinge}"
-
-    def links(self) -> tuple[tuple[str, str], ...]:
-        """The three binary links: Z–X, X–H and H–Y."""
-        return ((self.z, self.far), (self.far, self.hinge), (self.hinge, self.y))
-
-    def plates(self) -> tuple[tuple[str, ...], ...]:
-        return ()
 
     def place(self, ctx: Context) -> dict[str, JointState]:
         jz, jy = ctx.joint(self.z), ctx.joint(self.y)
@@ -137,12 +172,9 @@ class Hinge:
         e = np.exp(1j * phi)
         q = b - a * e
         d = np.abs(q)
-        asked = np.asarray(ctx.branch(self.name, self.pose), dtype=float)
-        usable = np.where(np.isfinite(asked), asked, 0.0)
-        index = np.clip(np.rint(usable), 0, 1)
-        sign = np.where(index == 1, 1.0, -1.0)
+        sign, asked, named = self._side(ctx)
         meet = plane.circle_circle(jz.pos, r, jy.pos, d, sign, tol=ASSEMBLY_TOL)
-        valid = jz.valid & jy.valid & meet.valid & (asked == index) & (d > 0)
+        valid = jz.valid & jy.valid & meet.valid & named & (d > 0)
         x = np.where(valid[..., None], meet.point, np.nan)
         w = _complex(x - jy.pos)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -178,21 +210,8 @@ class Hinge:
                 acc_h = ay + _vector(
                     b * (w2 / q - 2 * w1 * q1 / q**2 - w * q2 / q**2 + 2 * w * q1**2 / q**3)
                 )
-        label = np.where(closure >= 0, 1.0, -1.0)
-        states = {}
-        for name, pos, vel, acc in ((self.hinge, h, vel_h, acc_h), (self.far, x, vel_x, acc_x)):
-            vel, acc = mask_derivatives(vel, acc, regular)
-            states[name] = JointState(
-                np.where(valid[..., None], pos, np.nan),
-                vel,
-                acc,
-                valid,
-                regular,
-                margin=closure,
-                branch=asked,
-                label=label,
-            )
-        return states
+        rates = (vel_h, acc_h, vel_x, acc_x)
+        return self._states(h, x, rates, valid, regular, closure, asked)
 
     def closure(self, positions: Positions, params: Params) -> Array:
         """sin of the angle at Z between Z→Y and Z→X: 0 where X's two poses merge (Z, X, Y in
@@ -267,7 +286,7 @@ def _hinge_turn(phi: Array, a: Array, b: Array) -> tuple[Array, Array, Array]:
 
 
 @dataclass(frozen=True)
-class SphereHinge:
+class SphereHinge(_HingeStep):
     """The spherical hinge: joints ``hinge`` (H) and ``far`` (X) of a spherical linkage driven
     at the hinge H, every joint an axis through the sphere's centre and every link an arc.
 
@@ -298,40 +317,7 @@ class SphereHinge:
     1.2
     """
 
-    hinge: str
-    far: str
-    z: str
-    r: Param
-    y: str
-    a: Param
-    b: Param
-    phase: Param = 0.0
-    pose: str = "pose"
-
-    max_poses = 2
     space = "sphere"
-
-    @property
-    def name(self) -> str:
-        return self.hinge
-
-    @property
-    def joints(self) -> tuple[str, str]:
-        return (self.hinge, self.far)
-
-    @property
-    def parents(self) -> tuple[str, ...]:
-        return tuple(dict.fromkeys((self.z, self.y)))
-
-    @property
-    def title(self) -> str:
-        return f"driven hinge {self.hinge}"
-
-    def links(self) -> tuple[tuple[str, str], ...]:
-        return ((self.z, self.far), (self.far, self.hinge), (self.hinge, self.y))
-
-    def plates(self) -> tuple[tuple[str, ...], ...]:
-        return ()
 
     def place(self, ctx: Context) -> dict[str, JointState]:
         jz, jy = ctx.joint(self.z), ctx.joint(self.y)
@@ -340,13 +326,10 @@ class SphereHinge:
         sa, sb = np.sin(a), np.sin(b)
         cos_d = np.clip(np.cos(a) * np.cos(b) + sa * sb * np.cos(phi), -1.0, 1.0)
         d = np.arccos(cos_d)
-        asked = np.asarray(ctx.branch(self.name, self.pose), dtype=float)
-        usable = np.where(np.isfinite(asked), asked, 0.0)
-        index = np.clip(np.rint(usable), 0, 1)
-        sign = np.where(index == 1, 1.0, -1.0)
+        sign, asked, named = self._side(ctx)
         z, y = jz.pos, jy.pos
         meet = sphere.small_circles(z, r, y, d, sign, tol=ASSEMBLY_TOL)
-        valid = jz.valid & jy.valid & meet.valid & (asked == index) & (np.sin(d) > 0)
+        valid = jz.valid & jy.valid & meet.valid & named & (np.sin(d) > 0)
         x = np.where(valid[..., None], meet.point, np.nan)
         beta, beta1, beta2 = _hinge_turn(phi, a, b)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -409,21 +392,8 @@ class SphereHinge:
                     + 2.0 * cbt * b1 * n1
                     + sbeta * n2
                 )
-        label = np.where(closure >= 0, 1.0, -1.0)
-        states = {}
-        for name, pos, vel, acc in ((self.hinge, h, vel_h, acc_h), (self.far, x, vel_x, acc_x)):
-            vel, acc = mask_derivatives(vel, acc, regular)
-            states[name] = JointState(
-                np.where(valid[..., None], pos, np.nan),
-                vel,
-                acc,
-                valid,
-                regular,
-                margin=closure,
-                branch=asked,
-                label=label,
-            )
-        return states
+        rates = (vel_h, acc_h, vel_x, acc_x)
+        return self._states(h, x, rates, valid, regular, closure, asked)
 
     def closure(self, positions: Positions, params: Params) -> Array:
         """sin of the angle at Z between the great circles Z→Y and Z→X: 0 where X's two poses

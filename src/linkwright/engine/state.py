@@ -304,6 +304,47 @@ def mask_derivatives(
     return vel, acc
 
 
+def pose_slot(ctx: Context, step_name: str, key: str, most: int) -> tuple[NDArray[np.int_], Array]:
+    """The pose index a step with ``most`` poses is asked for at each sample (as an int usable
+    for indexing) and as given (a value that is not a whole number in range matches no pose)."""
+    asked = np.asarray(ctx.branch(step_name, key), dtype=float)
+    usable = np.where(np.isfinite(asked), asked, 0.0)
+    index = np.clip(np.rint(usable), 0, most - 1).astype(np.int64)
+    return index, asked
+
+
+def pose_states(
+    joints: tuple[str, ...],
+    pos: Array,
+    vel: Array | None,
+    acc: Array | None,
+    valid: NDArray[np.bool_],
+    regular: NDArray[np.bool_],
+    closure: Array,
+    slot: Array,
+) -> dict[str, JointState]:
+    """The states of the joints a pose step places (a triad, a driven hinge): ``pos``, ``vel``
+    and ``acc`` are ``(..., len(joints), d)``; positions NaN where not valid, derivatives where
+    not regular; every joint carries the step's signed closure as its margin, the pose asked
+    for as its branch, and the closure's sign as its label (it changes only where two poses
+    merge)."""
+    pos = np.where(valid[..., None, None], pos, np.nan)
+    vel, acc = mask_derivatives(vel, acc, regular[..., None])
+    return {
+        name: JointState(
+            pos[..., k, :],
+            None if vel is None else vel[..., k, :],
+            None if acc is None else acc[..., k, :],
+            valid,
+            regular,
+            margin=closure,
+            branch=slot,
+            label=np.where(closure >= 0, 1.0, -1.0),
+        )
+        for k, name in enumerate(joints)
+    }
+
+
 def always(positions: Positions, name: str) -> Array:
     """The closure of a step that assembles wherever its parents do: 1 at every sample."""
     return np.ones(np.shape(positions[name])[:-1])

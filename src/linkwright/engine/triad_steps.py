@@ -45,8 +45,9 @@ from linkwright.engine.state import (
     Param,
     Params,
     Positions,
-    mask_derivatives,
     param_value,
+    pose_slot,
+    pose_states,
 )
 from linkwright.engine.triad import MAX_POSES as PLANE_POSES
 from linkwright.engine.triad import triad_poses, triad_rates
@@ -71,14 +72,6 @@ def _broadcast_scalars(ctx: Context, params: tuple[Param, ...]) -> Array:
     """The step's scalar parameters as one array ``(..., samples, len(params))``."""
     values = [np.broadcast_to(ctx.scalar(p), ctx.theta.shape) for p in params]
     return np.stack(values, axis=-1)
-
-
-def _slot(ctx: Context, step_name: str, key: str, most: int) -> tuple[NDArray[np.int_], Array]:
-    """The pose index asked for at each sample (as an int usable for indexing) and as given."""
-    asked = np.asarray(ctx.branch(step_name, key), dtype=float)
-    usable = np.where(np.isfinite(asked), asked, 0.0)
-    index = np.clip(np.rint(usable), 0, most - 1).astype(np.int64)
-    return index, asked
 
 
 def _solve_distinct(
@@ -192,33 +185,6 @@ def triad_residual(
     return worst_arc
 
 
-def _states(
-    step: _TriadStep,
-    pos: Array,
-    vel: Array | None,
-    acc: Array | None,
-    valid: NDArray[np.bool_],
-    regular: NDArray[np.bool_],
-    closure: Array,
-    slot: Array,
-) -> dict[str, JointState]:
-    pos = np.where(valid[..., None, None], pos, np.nan)
-    vel, acc = mask_derivatives(vel, acc, regular[..., None])
-    return {
-        name: JointState(
-            pos[..., k, :],
-            None if vel is None else vel[..., k, :],
-            None if acc is None else acc[..., k, :],
-            valid,
-            regular,
-            margin=closure,
-            branch=slot,
-            label=np.where(closure >= 0, 1.0, -1.0),
-        )
-        for k, name in enumerate(step.joints)
-    }
-
-
 class _TriadStep:
     """What the planar and the spherical triad share: the pose index, the closure, the states.
 
@@ -325,7 +291,7 @@ class _TriadStep:
         body = tuple(np.broadcast_to(ctx.scalar(p), ctx.theta.shape) for p in self.body)
         anchored = np.logical_and.reduce([k.valid for k in ks])
         all_joints, count = self._poses(ctx.theta.shape, anchors, lengths, body)
-        index, asked = _slot(ctx, self.name, self.pose, self.max_poses)
+        index, asked = pose_slot(ctx, self.name, self.pose, self.max_poses)
         valid = anchored & (index < count) & (asked == index)
         pos = _pick(np.nan_to_num(all_joints), index)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -339,7 +305,7 @@ class _TriadStep:
                 vel, acc, fine = self._rates(anchors, kvel, kacc, pos, lengths)
             regular &= fine
         regular &= np.abs(closure) > SINGULAR_SIN
-        return _states(self, pos, vel, acc, valid, regular, closure, asked)
+        return pose_states(self.joints, pos, vel, acc, valid, regular, closure, asked)
 
 
 @dataclass(frozen=True)
