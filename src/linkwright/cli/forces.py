@@ -23,7 +23,7 @@ from linkwright.cli.shared import (
 )
 
 if TYPE_CHECKING:
-    from linkwright.dynamics import Forces
+    from linkwright.dynamics import Forces, Loads, MassProps, Structure
     from linkwright.io import Document
 
 DEFAULT_FORCE_INPUTS = [float(10 * k) for k in range(36)]
@@ -66,7 +66,7 @@ def forces(
     give N, N·m and J).
     """
     from linkwright.cli.shared import parse_inputs
-    from linkwright.dynamics import ForcesInputError, UnsupportedPlan, forces_of, forces_setup
+    from linkwright.dynamics import forces_of
     from linkwright.engine import cost
     from linkwright.mechanisms.base import configurations, solve
 
@@ -77,18 +77,7 @@ def forces(
     degrees = parse_inputs(inputs) if inputs is not None else list(DEFAULT_FORCE_INPUTS)
     doc = load_file(file)
     mech = doc.mechanism
-    try:
-        st, masses, loads = forces_setup(
-            mech,
-            doc.raw["mechanism"].get("mass", {}),
-            doc.raw.get("loads"),
-            speed=speed,
-            speed_field="loads.speed (or --speed)",
-        )
-    except UnsupportedPlan as exc:
-        raise CliError(f"forces: {exc}") from None
-    except ForcesInputError as exc:
-        raise CliError(str(exc)) from None
+    st, masses, loads = document_forces(doc, speed=speed, speed_field="loads.speed (or --speed)")
     params = mech.params()
 
     # Bounded before the work: solving with derivatives, then one dense solve per sample.
@@ -134,6 +123,30 @@ def forces(
         typer.echo(_csv(rows), nl=False)
     else:
         typer.echo(_text(doc, meta, rows), nl=False)
+
+
+def document_forces(
+    doc: Document,
+    *,
+    speed: float | None = None,
+    speed_field: str = "loads.speed",
+    unsupported: str = "forces: ",
+    invalid: str = "",
+) -> tuple[Structure, dict[str, MassProps], Loads]:
+    """A document's bodies, masses and loads for a forces run
+    (:func:`linkwright.dynamics.forces_setup`), every refusal a one-line :class:`CliError`:
+    ``unsupported`` prefixes a plan forces cannot set up, ``invalid`` a bad mass or load."""
+    from linkwright.dynamics import ForcesInputError, UnsupportedPlan, forces_setup
+
+    mass = doc.raw["mechanism"].get("mass", {})
+    try:
+        return forces_setup(
+            doc.mechanism, mass, doc.raw.get("loads"), speed=speed, speed_field=speed_field
+        )
+    except UnsupportedPlan as exc:
+        raise CliError(f"{unsupported}{exc}") from None
+    except ForcesInputError as exc:
+        raise CliError(f"{invalid}{exc}") from None
 
 
 def _units(doc: Document) -> dict[str, str]:

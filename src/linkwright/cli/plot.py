@@ -128,18 +128,12 @@ def plot(
 def _force_figure(doc: Any, kind: str, samples: int, file: str) -> Any:
     """The force diagram of a document over its circuit (masses and loads from the document,
     checked as ``linkwright forces`` checks them)."""
-    from linkwright.dynamics import ForcesInputError, UnsupportedPlan, forces_of, forces_setup
+    from linkwright.cli.forces import document_forces
+    from linkwright.dynamics import forces_of
     from linkwright.mechanisms.base import circuit
     from linkwright.plot.forces import plot_forces
 
-    try:
-        st, masses, loads = forces_setup(
-            doc.mechanism, doc.raw["mechanism"].get("mass", {}), doc.raw.get("loads")
-        )
-    except UnsupportedPlan as exc:
-        raise CliError(f"forces: {exc}") from None
-    except ForcesInputError as exc:
-        raise CliError(str(exc)) from None
+    st, masses, loads = document_forces(doc)
     motion = circuit(doc.mechanism, samples)
     result = forces_of(st, doc.mechanism.params(), motion, masses, loads)
     # The document's mass unit (kg when none is named) and length unit: N·m and N for metres.
@@ -216,14 +210,10 @@ def export(
         doc.raw["mechanism"].get("mass") or doc.raw.get("loads") is not None
     ):
         # A document with masses or loads exports its forces beside the paths.
-        from linkwright.dynamics import ForcesInputError, UnsupportedPlan, forces_setup
+        from linkwright.cli.forces import document_forces
 
-        try:
-            forces = forces_setup(
-                doc.mechanism, doc.raw["mechanism"].get("mass", {}), doc.raw.get("loads")
-            )
-        except (UnsupportedPlan, ForcesInputError) as exc:
-            raise CliError(f"{file}: forces: {exc}") from None
+        where = f"{file}: forces: "
+        forces = document_forces(doc, unsupported=where, invalid=where)
     try:
         path = write(
             doc.mechanism,

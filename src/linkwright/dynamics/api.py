@@ -9,7 +9,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.dynamics.bodies import Structure, structure
-from linkwright.dynamics.model import Loads, MassProps, check_speed, loads_from, masses_from
+from linkwright.dynamics.model import (
+    Loads,
+    MassProps,
+    check_speed,
+    link_lengths,
+    loads_from,
+    masses_from,
+)
 from linkwright.dynamics.planar import Forces, body_kinematics, forces_of
 from linkwright.mechanisms.base import Mechanism, solve
 
@@ -48,11 +55,7 @@ def forces(
     props: dict[str, MassProps] = {}
     plain = {k: v for k, v in (masses or {}).items() if not isinstance(v, MassProps)}
     if plain:
-        lengths = {
-            b.name: float(np.max(np.asarray(mechanism.params()[b.name])))
-            for b in st.bodies
-            if b.name in mechanism.params()
-        }
+        lengths = link_lengths(st, mechanism.params())
         props.update(masses_from(plain, st, lengths, path="masses"))
     props.update({k: v for k, v in (masses or {}).items() if isinstance(v, MassProps)})
     motion = solve(mechanism, inputs, order=2)
@@ -89,9 +92,7 @@ for inertia forces; set loads.inertia = false for a static analysis
     from dataclasses import replace
 
     st = structure(mechanism.plan)
-    params = mechanism.params()
-    lengths = {b.name: float(np.max(params[b.name])) for b in st.bodies if b.name in params}
-    masses = masses_from(mass or {}, st, lengths)
+    masses = masses_from(mass or {}, st, link_lengths(st, mechanism.params()))
     parsed = loads_from(loads, st, mechanism.plan.joints)
     if speed is not None:
         parsed = replace(parsed, speed_rpm=float(speed))

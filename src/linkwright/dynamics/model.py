@@ -59,6 +59,7 @@ __all__ = [
     "MassProps",
     "check_forces_input",
     "check_speed",
+    "link_lengths",
     "loads_from",
     "masses_from",
 ]
@@ -158,6 +159,16 @@ def _unknown(noun: str, key: str, known: tuple[str, ...] | list[str]) -> str:
     if close:
         return f"unknown {noun} {key!r} (did you mean {close[0]!r}?)"
     return f"unknown {noun} {key!r} (known: {', '.join(known) or 'none'})"
+
+
+def link_lengths(structure: Structure, params: Mapping[str, Any]) -> dict[str, float]:
+    """Each body's link length (the largest of a batch), by its name, where a length field
+    names it: what :func:`masses_from` checks a centre of mass against."""
+    return {
+        b.name: float(np.max(np.asarray(params[b.name])))
+        for b in structure.bodies
+        if b.name in params
+    }
 
 
 def masses_from(
@@ -411,10 +422,7 @@ def check_forces_input(mechanism: Any, mass: Any, loads: Any) -> None:
     except UnsupportedPlan:
         return
     params = mechanism.params()
-    lengths = {
-        b.name: float(np.max(np.asarray(params[b.name]))) for b in found.bodies if b.name in params
-    }
-    masses = masses_from(mass, found, lengths) if mass is not None else {}
+    masses = masses_from(mass, found, link_lengths(found, params)) if mass is not None else {}
     parsed = loads_from(loads, found, mechanism.plan.joints)
     if isinstance(loads, Mapping) and "speed" in loads:
         check_speed(masses, parsed)

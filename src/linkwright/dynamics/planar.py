@@ -44,7 +44,14 @@ from linkwright.engine import Motion
 from linkwright.engine.state import param_value
 from linkwright.geometry import plane
 
-__all__ = ["Forces", "Kinematics", "body_kinematics", "forces_of", "mechanical_advantage"]
+__all__ = [
+    "Forces",
+    "Kinematics",
+    "body_kinematics",
+    "check_inputs",
+    "forces_of",
+    "mechanical_advantage",
+]
 
 Array = NDArray[np.float64]
 
@@ -105,6 +112,16 @@ def _frame(body: Body, m: Motion) -> tuple[Array, Array, Array, Array, Array, Ar
     pos, vel, acc = m.positions, m.velocities, m.accelerations
     assert vel is not None and acc is not None
     return pos[o], pos[t] - pos[o], vel[t] - vel[o], acc[t] - acc[o], vel[o], acc[o]
+
+
+def check_inputs(st: Structure, masses: Mapping[str, MassProps], motion: Motion) -> None:
+    """Refuse masses on links the linkage does not have, and a motion without derivatives
+    (what both spaces' solvers need before they start)."""
+    for name in masses:
+        if name not in st.names:
+            raise ForcesInputError("mass", f"unknown link {name!r} (known: {', '.join(st.names)})")
+    if motion.velocities is None or motion.accelerations is None:
+        raise ValueError("forces need a motion solved with order=2")
 
 
 def body_kinematics(body: Body, props: MassProps | None, m: Motion) -> Kinematics:
@@ -193,11 +210,7 @@ def forces_of(
         from linkwright.dynamics.spherical import forces_of_sphere
 
         return forces_of_sphere(st, params, motion, masses, loads)
-    for name in masses:
-        if name not in st.names:
-            raise ForcesInputError("mass", f"unknown link {name!r} (known: {', '.join(st.names)})")
-    if motion.velocities is None or motion.accelerations is None:
-        raise ValueError("forces need a motion solved with order=2")
+    check_inputs(st, masses, motion)
     shape = motion.input.shape
     omega = loads.omega if loads.inertia else 0.0
     eps = loads.acceleration if loads.inertia else 0.0

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from linkwright.dynamics.bodies import Body, Structure, UnsupportedPlan
 from linkwright.dynamics.model import ForcesInputError, Loads, MassProps
-from linkwright.dynamics.planar import Forces, solve_samples
+from linkwright.dynamics.planar import Forces, check_inputs, solve_samples
 from linkwright.engine import Motion
 from linkwright.geometry import sphere
 
@@ -186,11 +186,8 @@ def forces_of_sphere(
     """
     if st.geared:
         raise UnsupportedPlan("geared cranks on the sphere: their forces are not implemented yet")
-    for name in masses:
-        if name not in st.names:
-            raise ForcesInputError("mass", f"unknown link {name!r} (known: {', '.join(st.names)})")
-    if motion.velocities is None or motion.accelerations is None:
-        raise ValueError("forces need a motion solved with order=2")
+    check_inputs(st, masses, motion)
+    assert motion.velocities is not None  # checked: the energy balance reads them below
     shape = motion.input.shape
     omega = loads.omega if loads.inertia else 0.0
     eps = loads.acceleration if loads.inertia else 0.0
