@@ -42,6 +42,7 @@ import numpy as np
 from linkwright.io import document_to_dict, list_examples, load_example
 from linkwright.server.local import CHROMIUM_ARGS, LocalServer, chromium_path
 from linkwright.server.scene import fields, scene
+from linkwright.server.scene_io import set_path
 
 TARGET_P95_MS = 50.0
 TARGET_SCENE_MS = 15.0
@@ -83,17 +84,6 @@ def _values(value: float, n: int) -> list[float]:
     return [float(value) * (1.0 + 2e-5 * ((i % 50) + 1)) for i in range(n)]
 
 
-def _set(tree: Any, path: str, value: Any) -> None:
-    keys = path.split(".")
-    for key in keys[:-1]:
-        tree = tree[int(key)] if isinstance(tree, list) else tree[key]
-    last = keys[-1]
-    if isinstance(tree, list):
-        tree[int(last)] = value
-    else:
-        tree[last] = value
-
-
 class Case:
     """One bundled example and the documents of its changes."""
 
@@ -109,7 +99,7 @@ class Case:
         out = []
         for v in self.values:
             doc = copy.deepcopy(self.base)
-            _set(doc, self.field["path"], v * (1.0 + 1e-9 * self.offset))
+            set_path(doc, self.field["path"], v * (1.0 + 1e-9 * self.offset))
             out.append(doc)
         self.offset += 1
         return out
