@@ -48,6 +48,14 @@ from linkwright.engine.state import (
 )
 from linkwright.geometry import plane, sphere
 
+FOLD = 1e-7
+"""Least |X Y| (relative to a + b) at which H is placed. X meets Y only where |HX| = |HY| and
+the angle at H is 0 (a rhombus or a kite folding): there H may be anywhere on its circle about
+Y, and just beside it H's direction from Y is X − Y over |X Y|, which rounding in X's
+coordinates (about ε·size) spoils by ε·size/|X Y|. Within 1e-7 of the fold that would pass
+1e-9 of the size, so the step answers "no pose" there, as a crank-driven four-bar's dyad does
+where A falls on B0."""
+
 __all__ = ["Hinge", "SphereHinge"]
 
 
@@ -174,7 +182,7 @@ class Hinge(_HingeStep):
         d = np.abs(q)
         sign, asked, named = self._side(ctx)
         meet = plane.circle_circle(jz.pos, r, jy.pos, d, sign, tol=ASSEMBLY_TOL)
-        valid = jz.valid & jy.valid & meet.valid & named & (d > 0)
+        valid = jz.valid & jy.valid & meet.valid & named & (d > FOLD * (a + b))
         x = np.where(valid[..., None], meet.point, np.nan)
         w = _complex(x - jy.pos)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -329,7 +337,7 @@ class SphereHinge(_HingeStep):
         sign, asked, named = self._side(ctx)
         z, y = jz.pos, jy.pos
         meet = sphere.small_circles(z, r, y, d, sign, tol=ASSEMBLY_TOL)
-        valid = jz.valid & jy.valid & meet.valid & named & (np.sin(d) > 0)
+        valid = jz.valid & jy.valid & meet.valid & named & (np.sin(d) > FOLD * (a + b))
         x = np.where(valid[..., None], meet.point, np.nan)
         beta, beta1, beta2 = _hinge_turn(phi, a, b)
         with np.errstate(divide="ignore", invalid="ignore"):
