@@ -89,7 +89,57 @@ def shoot(page: Page, url: str) -> list[Path]:
     page.wait_for_selector("#tab-synthesis[data-s1]")
     _settle(page, before)
     save("synthesis")
+
+    # the builder: a four-bar with a coupler plate drawn from an empty canvas, then the sphere
+    _tab(page, "library")
+    _example(page, "crank-rocker")
+    page.click("[data-testid=build]")
+    page.wait_for_selector("[data-testid=build-tools]:not([hidden])")
+    page.click("[data-testid=new-plane]")
+    page.wait_for_function("document.body.dataset.busy !== '1'")
+    _draw(page, "ground", [[0, 0], [4, 0]])
+    _draw(page, "link", [[0, 0], [1, 1.5], [4.5, 3], [4, 0]])
+    page.keyboard.press("Escape")
+    _draw(page, "plate", [[1, 1.5], [4.5, 3], [3.2, 4.4]])
+    page.keyboard.press("Enter")
+    page.wait_for_function("document.body.dataset.busy !== '1'")
+    _draw(page, "driver", [[0, 0], [1, 1.5]])
+    page.wait_for_function("lw.sketchReport() && lw.sketchReport().status === 'ok'")
+    page.wait_for_timeout(400)
+    save("builder")
+
+    page.click("[data-testid=new-sphere]")
+    page.wait_for_function("document.body.dataset.busy !== '1'")
+    disc = page.evaluate("lw.view().disc")
+    box = page.locator("#drawing").bounding_box()
+
+    def on_sphere(u: float, v: float) -> tuple[float, float]:
+        return box["x"] + disc["cx"] + u * disc["r"], box["y"] + disc["cy"] - v * disc["r"]
+
+    for tool, points in (
+        ("ground", [(-0.35, -0.15), (0.35, -0.15)]),
+        ("link", [(-0.35, -0.15), (-0.3, 0.15), (0.2, 0.35), (0.35, -0.15)]),
+        ("driver", [(-0.35, -0.15), (-0.3, 0.15)]),
+    ):
+        page.click(f"[data-testid=tool-{tool}]")
+        for u, v in points:
+            page.mouse.click(*on_sphere(u, v))
+            page.wait_for_function("document.body.dataset.busy !== '1'")
+        page.keyboard.press("Escape")
+    page.wait_for_function("lw.sketchReport() && lw.sketchReport().status === 'ok'")
+    page.wait_for_timeout(400)
+    save("builder-sphere")
     return written
+
+
+def _draw(page: Page, tool: str, points: list[list[float]]) -> None:
+    """Click the builder's tool, then each model point in turn."""
+    page.click(f"[data-testid=tool-{tool}]")
+    box = page.locator("#drawing").bounding_box()
+    for p in points:
+        sx, sy = page.evaluate(f"lw.toScreen({list(map(float, p))})")
+        page.mouse.click(box["x"] + sx, box["y"] + sy)
+        page.wait_for_function("document.body.dataset.busy !== '1'")
 
 
 def main() -> int:

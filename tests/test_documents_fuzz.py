@@ -186,6 +186,12 @@ FIELD_VALUES = {
     "u": number_values,
     "v": number_values,
     "assembly": st.sampled_from([1, -1, 0, 2, 1.0, "1"]),
+    "j2": name_values,
+    "j3": name_values,
+    "p3": name_values,
+    "r3": number_values,
+    "side": number_values,
+    "pose": st.sampled_from([0, 1, 5, 6, -1, 0.5, "0"]),
 }
 
 

@@ -118,7 +118,7 @@ def test_sphere_joint_schema_covers_the_sphere_joint_classes():
     assert (
         set(SPHERE_JOINT_SPECS)
         == set(SPHERE_JOINT_TYPES)
-        == {"fixed", "crank", "rrr", "rigid", "hinge"}
+        == {"fixed", "crank", "rrr", "rigid", "hinge", "triad"}
     )
     for kind, specs in SPHERE_JOINT_SPECS.items():
         names = {f.name for f in dataclasses.fields(SPHERE_JOINT_TYPES[kind])} - {"name"}

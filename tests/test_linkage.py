@@ -10,6 +10,7 @@ holds to 1e-10 of the size, and the analytic derivatives match central differenc
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 
 import numpy as np
@@ -412,7 +413,7 @@ def test_params_plan_and_joints():
     listed = Linkage(joints=[FixedJoint("O", [0, 0]), CrankJoint("A", "O", 1)], traced="O")
     assert isinstance(listed.joints, tuple) and listed.traced == ("O",)
     assert mech == fourbar_linkage([0, 0], [4, 0], 1, 5, 3.5, u=2, v=1, assembly=-1)
-    assert set(JOINT_TYPES) == {"fixed", "crank", "rrr", "rrp", "rigid", "hinge"}
+    assert set(JOINT_TYPES) == {"fixed", "crank", "rrr", "rrp", "rigid", "hinge", "triad"}
 
 
 def test_with_assembly_and_configurations():
@@ -615,6 +616,9 @@ GOOD = {
     "u": st.floats(-4, 4),
     "v": st.floats(-4, 4),
     "assembly": st.sampled_from([1.0, -1.0]),
+    "r3": st.floats(0.2, 4),
+    "side": st.floats(0.2, 4),
+    "pose": st.sampled_from([0.0, 1.0, 5.0]),
 }
 
 
@@ -625,13 +629,14 @@ def random_joint_lists(draw):
     for i in range(draw(st.integers(0, 6))):
         cls = draw(st.sampled_from(list(JOINT_TYPES.values())))
         names = [f.name for f in dataclasses.fields(cls)]
-        parents = iter(draw(st.permutations(placed)))
+        # Distinct parents while there are enough (a triad's three may repeat one).
+        parents = itertools.cycle(draw(st.permutations(placed)))
         kwargs = {}
         for field_name in names:
             if field_name == "name":
                 kwargs[field_name] = f"J{i}"
-            elif field_name == "far":  # a driven hinge places a second joint, a new name
-                kwargs[field_name] = f"J{i}far"
+            elif field_name in ("far", "j2", "j3"):  # further joints it places: new names
+                kwargs[field_name] = f"J{i}{field_name}"
             elif field_name in GOOD:
                 kwargs[field_name] = draw(GOOD[field_name])
             else:  # a parent: distinct ones, all placed before

@@ -367,7 +367,7 @@ def test_match_environment_sets_the_atlas_size(tmp_path: Path, monkeypatch: pyte
     ("points", "needle"),
     [
         ([[0, 0], [1, 0], [1, 1]], "points: a curve needs at least 8 points, got 3"),
-        ([[0, 0, 0]] * 9, "points: row 0 has 3 numbers"),
+        ([[0, 0, 0]] * 9, "points: row 0 has 3 numbers, all zero: a point on the sphere is"),
         ([[0, 0]] * 9, "points: all the same point"),
         ([[0, 0]] * 4 + [[1, 0], [1, 1], [0, 1], [0.5, float("nan")], [0, 0.5]],
          "points: row 7 is not finite"),

@@ -194,13 +194,11 @@ def _doubleslider_lines(m: dict[str, Any]) -> None:
 
 
 def _linkage_traced(m: dict[str, Any]) -> None:
-    names = {j["name"] for j in m["joints"]}
+    # A driven hinge places its far joint too, a triad its j2 and j3: each a joint to trace.
+    placed = tuple(j[key] for j in m["joints"] for key in ("name", "far", "j2", "j3") if key in j)
     for i, name in enumerate(m["traced"]):
-        if name not in names:
-            raise DocumentError(
-                f"mechanism.traced[{i}]",
-                unknown_choice("joint", name, tuple(j["name"] for j in m["joints"])),
-            )
+        if name not in placed:
+            raise DocumentError(f"mechanism.traced[{i}]", unknown_choice("joint", name, placed))
         if name in m["traced"][:i]:
             raise DocumentError(f"mechanism.traced[{i}]", f"joint {name!r} is listed twice")
 
@@ -231,6 +229,20 @@ def refresh_family_specs() -> None:
     if len(FAMILY_SPECS) != sum(1 for _ in registry.families()):
         FAMILY_SPECS.clear()
         FAMILY_SPECS.update(_family_specs())
+
+
+def _triad_places(length: str) -> tuple[FieldSpec, ...]:
+    """A triad's joints and binary links: J1 (its name), j2, j3, each J_k at r_k from p_k."""
+    return (
+        FieldSpec("j2", "joint"),
+        FieldSpec("j3", "joint"),
+        FieldSpec("p1", "joint"),
+        FieldSpec("r1", length),
+        FieldSpec("p2", "joint"),
+        FieldSpec("r2", length),
+        FieldSpec("p3", "joint"),
+        FieldSpec("r3", length),
+    )
 
 
 JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
@@ -271,6 +283,14 @@ JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
         FieldSpec("b", "length"),
         FieldSpec("phase", "angle_deg", default=0.0),
         FieldSpec("assembly", "sign", default=1),
+    ),
+    # A triad (TriadJoint): places the ternary link's joints name (J1), j2 and j3 at once.
+    "triad": _triad_places("length")
+    + (
+        FieldSpec("side", "length"),
+        FieldSpec("u", "number", default=0.0),
+        FieldSpec("v", "number", default=0.0),
+        FieldSpec("pose", "pose", default=0),
     ),
 }
 """A planar ``linkage`` joint's fields by its ``type`` (besides ``name`` and ``type``), in
@@ -314,13 +334,22 @@ SPHERE_JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
         FieldSpec("phase", "angle_deg", default=0.0),
         FieldSpec("assembly", "sign", default=1),
     ),
+    "triad": _triad_places("arc")
+    + (
+        FieldSpec("side", "arc"),
+        FieldSpec("arc", "offset_arc", default=0.0),
+        FieldSpec("angle", "angle_deg", default=0.0),
+        FieldSpec("pose", "pose", default=0),
+    ),
 }
 """A spherical ``linkage`` joint's fields by its ``type`` (``space = "sphere"``): arcs and angles
 in degrees, a fixed joint's ``at`` an axis [x, y, z]; the names are those of
 :class:`~linkwright.mechanisms.linkage.FixedJoint`,
 :class:`~linkwright.mechanisms.linkage.SphereCrankJoint`,
-:class:`~linkwright.mechanisms.linkage.DyadJoint` and
-:class:`~linkwright.mechanisms.linkage.SphereRigidJoint`. There is no ``rrp``."""
+:class:`~linkwright.mechanisms.linkage.DyadJoint`,
+:class:`~linkwright.mechanisms.linkage.SphereRigidJoint`,
+:class:`~linkwright.mechanisms.linkage.HingeJoint` and
+:class:`~linkwright.mechanisms.linkage.SphereTriadJoint`. There is no ``rrp``."""
 
 # A linkage's ``space`` → its joints' field tables.
 JOINT_SPECS_IN: dict[str, dict[str, tuple[FieldSpec, ...]]] = {

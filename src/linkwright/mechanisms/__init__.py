@@ -22,6 +22,8 @@ from linkwright.mechanisms.linkage import (
     SliderJoint,
     SphereCrankJoint,
     SphereRigidJoint,
+    SphereTriadJoint,
+    TriadJoint,
 )
 from linkwright.mechanisms.planar import DoubleSlider, FourBar, GearedFiveBar, SliderCrank
 from linkwright.mechanisms.sixbar import Stephenson1, Stephenson3, Watt1, Watt2
@@ -53,11 +55,13 @@ __all__ = [
     "SliderJoint",
     "SphereCrankJoint",
     "SphereRigidJoint",
+    "SphereTriadJoint",
     "SphericalFourBar",
     "SphericalSixBar",
     "SphericalStephenson3",
     "Stephenson1",
     "Stephenson3",
+    "TriadJoint",
     "Watt1",
     "Watt2",
     "circuit",

@@ -17,6 +17,11 @@ HingeJoint      ``hinge``     the linkage driven at a moving hinge: the joint ``
                               the joint ``far`` (X), with |X z| = ``r``, |H X| = ``a``,
                               |H y| = ``b`` and the angle at H from H→y to H→X equal to
                               ``phase + θ`` (in place of a crank)
+TriadJoint      ``triad``     the three joints of a ternary link at once (a triad, an Assur
+                              group of class III): ``name`` (J1), ``j2``, ``j3``, held by
+                              binary links of lengths ``r1``, ``r2``, ``r3`` to the placed joints
+                              ``p1``, ``p2``, ``p3``; J2 at ``side`` from J1 and J3 at (``u``,
+                              ``v``) in the frame of J1→J2; ``pose`` picks one of its poses
 ==============  ============  ====================================================================
 
 On the sphere (``space = "sphere"``) every joint is a revolute whose axis passes through the
@@ -37,6 +42,9 @@ SphereRigidJoint  ``rigid``   a point at arc ``arc`` from ``origin``, at ``angle
                               great circle origin→toward (right-handed about +O·origin)
 HingeJoint        ``hinge``   as in the plane, its lengths arcs and the angle at H between
                               great circles, right-handed about +O·H
+SphereTriadJoint  ``triad``   as in the plane, its lengths arcs: J2 at arc ``side`` from J1, J3
+                              at arc ``arc`` from J1, at ``angle`` from the great circle J1→J2
+                              (right-handed about +O·J1, as a rigid point is placed)
 ================  ==========  ==================================================================
 
 A slider has no spherical counterpart of its own: a pin whose guide is a great circle is an
@@ -48,6 +56,13 @@ joint J placed from P1 then P2 has ``assembly = sign((P2 − P1) × (J − P1))`
 outside the sphere); a slider pin B has ``assembly = sign((B − H)·d)``, H the foot of P1 on the
 guide and d = (cos line_angle, sin line_angle). Planar rigid points sit at (u, v) in the frame
 with origin ``origin`` and x axis towards ``toward`` (v to the left).
+
+A triad has no sign that tells its poses apart along the motion (up to 6 in the plane, 8 on the
+sphere); its ``pose`` is the engine's pose index, as the Stephenson III families write theirs:
+the slot of the pose at each input in the order of the body's rotation (the direction of
+J1→J2) in the plane, and of J2's angle on its circle about p2, from the great circle p2→p1,
+on the sphere (:mod:`linkwright.engine.triad_steps`). It names one configuration at one input;
+the circuit tracer follows a pose from there by continuity.
 
 This module holds the specs, the tables that map a document's ``type`` to them, what kind of
 number each field must be (:func:`numeric_kinds`) and the linkage's error
@@ -68,6 +83,7 @@ from linkwright.mechanisms.base import InvalidMechanism
 __all__ = [
     "ALL_SPECS",
     "JOINT_TYPES",
+    "PLACES",
     "REFERENCES",
     "SPACES",
     "SPHERE_JOINT_TYPES",
@@ -81,6 +97,8 @@ __all__ = [
     "SliderJoint",
     "SphereCrankJoint",
     "SphereRigidJoint",
+    "SphereTriadJoint",
+    "TriadJoint",
     "numeric_kinds",
     "placed_by",
     "unit_axis",
@@ -482,6 +500,133 @@ class SphereRigidJoint(_Spec):
         return (self.origin, self.toward)
 
 
+class _TriadSpec(_Spec):
+    """What the planar and the spherical triad share: the joints it places and reads."""
+
+    name: str
+    j2: str
+    j3: str
+    p1: str
+    p2: str
+    p3: str
+
+    type: ClassVar[str] = "triad"
+
+    @property
+    def parents(self) -> tuple[str, ...]:
+        return (self.p1, self.p2, self.p3)
+
+    @property
+    def placed(self) -> tuple[str, ...]:
+        """The joints it places: J1 (its name), J2, J3."""
+        return (self.name, self.j2, self.j3)
+
+
+@dataclass(frozen=True, eq=False)
+class TriadJoint(_TriadSpec):
+    """A ternary link J1 J2 J3 (``name``, ``j2``, ``j3``) held by three binary links: J_k at
+    ``r_k`` from the placed joint ``p_k``. A triad (an Assur group of class III) places all
+    three at once, where no dyad can place any one of them (a Stephenson III driven at its
+    output, for one).
+
+    The link's shape: J2 at ``side`` from J1, J3 at (``u``, ``v``) in the frame with origin
+    J1 and x axis towards J2 (v to the left). ``pose`` is the engine's pose index, 0 to 5:
+    the slot of the pose at each input in the order of the direction of J1→J2
+    (:class:`~linkwright.engine.triad_steps.Triad`).
+
+    Examples
+    --------
+    The Stephenson III six-bar driven at its output link D0D: its coupler ABC is held by the
+    crank A0A, the rocker B0B and the link CD. At θ = 90° it has two poses; each holds every
+    link to its length:
+
+    >>> import numpy as np
+    >>> from linkwright import Linkage, configurations
+    >>> joints = [FixedJoint("A0", [0, 0]), FixedJoint("B0", [4, 0]),
+    ...           FixedJoint("D0", [0, 2.8]), CrankJoint("D", "D0", 1.0),
+    ...           TriadJoint("A", "B", "C", "A0", 1.0, "B0", 3.0, "D", 0.7,
+    ...                      side=4.0, u=2.0, v=2.0)]
+    >>> found = configurations(Linkage(joints=joints), [np.pi / 2])
+    >>> [bool(motion.valid[0]) for _, motion in found]
+    [True, True, False, False, False, False]
+    >>> p = found[1][1].positions
+    >>> [round(float(np.hypot(*(p[j][0] - p[k][0]))), 12)
+    ...  for j, k in (("A", "A0"), ("B", "B0"), ("C", "D"), ("A", "B"))]
+    [1.0, 3.0, 0.7, 4.0]
+
+    Its other two joints are new joints, named once:
+
+    >>> Linkage(joints=joints[:4] + [TriadJoint("A", "B", "D", "A0", 1.0, "B0", 3.0, "D0",
+    ...                                         0.7, side=4.0, u=2.0, v=2.0)])
+    Traceback (most recent call last):
+    ...
+    linkwright.mechanisms.linkage.InvalidLinkage: joint 'A': j3 must be a new joint's name \
+('D' is listed at joints[3]), got 'D'
+    """
+
+    name: str
+    j2: str
+    j3: str
+    p1: str
+    r1: ArrayLike
+    p2: str
+    r2: ArrayLike
+    p3: str
+    r3: ArrayLike
+    side: ArrayLike
+    u: ArrayLike = 0.0
+    v: ArrayLike = 0.0
+    pose: ArrayLike = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class SphereTriadJoint(_TriadSpec):
+    """A spherical ternary link J1 J2 J3 held by three binary links: J_k at arc ``r_k`` from
+    the placed joint ``p_k`` (arcs strictly between 0 and π).
+
+    The link's shape: J2 at arc ``side`` from J1, J3 at arc ``arc`` from J1 turned by
+    ``angle`` from the great circle J1→J2, right-handed about +O·J1 (as
+    :class:`SphereRigidJoint` places a point). ``pose`` is the engine's pose index, 0 to 7:
+    the slot of the pose at each input in the order of J2's angle on its circle about p2,
+    measured from the great circle p2→p1, right-handed about +O·p2
+    (:class:`~linkwright.engine.triad_steps.SphereTriad`).
+
+    Examples
+    --------
+    Paper 001's Stephenson III driven at FG has 8 real configurations at θ = −90° (issue 21's
+    arcs, its coupler BCE a triad held by AB, CD and EF; the paper's θ6 starts from the great
+    circle G→(away from D), half a turn from G→D):
+
+    >>> import numpy as np
+    >>> from linkwright import Linkage, configurations
+    >>> d = np.radians
+    >>> a1, a2, a3, a4, a6, sigma, a7, a8, a9 = d([71.1, 64.1, 68.6, 65.7, 69.0, 102.0,
+    ...                                           74.1, 52.6, 19.7])
+    >>> axis = lambda t: [0.0, np.sin(t), np.cos(t)]
+    >>> fg = Linkage(joints=[
+    ...     FixedJoint("A", axis(0.0)), FixedJoint("D", axis(a1)), FixedJoint("G", axis(a1 + a9)),
+    ...     SphereCrankJoint("F", "G", a8, phase=np.pi, toward="D"),
+    ...     SphereTriadJoint("C", "B", "E", "D", a4, "A", a2, "F", a7, side=a3, arc=a6,
+    ...                      angle=np.pi - sigma)], space="sphere")
+    >>> sum(int(m.valid[0]) for _, m in configurations(fg, [d(-90)]))
+    8
+    """
+
+    name: str
+    j2: str
+    j3: str
+    p1: str
+    r1: ArrayLike
+    p2: str
+    r2: ArrayLike
+    p3: str
+    r3: ArrayLike
+    side: ArrayLike
+    arc: ArrayLike = 0.0
+    angle: ArrayLike = 0.0
+    pose: ArrayLike = 0.0
+
+
 Joint = (
     FixedJoint
     | CrankJoint
@@ -491,24 +636,34 @@ Joint = (
     | SphereCrankJoint
     | SphereRigidJoint
     | HingeJoint
+    | TriadJoint
+    | SphereTriadJoint
 )
 """Any joint spec."""
 
 JOINT_TYPES: dict[str, type[Joint]] = {
     cls.type: cls
-    for cls in (FixedJoint, CrankJoint, DyadJoint, SliderJoint, RigidJoint, HingeJoint)
+    for cls in (FixedJoint, CrankJoint, DyadJoint, SliderJoint, RigidJoint, HingeJoint, TriadJoint)
 }
 """Document ``type`` → joint spec class, in the plane."""
 
 SPHERE_JOINT_TYPES: dict[str, type[Joint]] = {
-    cls.type: cls for cls in (FixedJoint, SphereCrankJoint, DyadJoint, SphereRigidJoint, HingeJoint)
+    cls.type: cls
+    for cls in (
+        FixedJoint,
+        SphereCrankJoint,
+        DyadJoint,
+        SphereRigidJoint,
+        HingeJoint,
+        SphereTriadJoint,
+    )
 }
 """Document ``type`` → joint spec class, on the sphere (no ``rrp``: see the module notes)."""
 
 SPACES: dict[str, dict[str, type[Joint]]] = {"plane": JOINT_TYPES, "sphere": SPHERE_JOINT_TYPES}
 """A linkage's ``space`` → the joint spec classes it is built from."""
 
-ALL_SPECS = (*JOINT_TYPES.values(), SphereCrankJoint, SphereRigidJoint)
+ALL_SPECS = (*JOINT_TYPES.values(), SphereCrankJoint, SphereRigidJoint, SphereTriadJoint)
 
 # What each numeric field must be; names are the dataclass fields. A DyadJoint's lengths are
 # arcs on the sphere, and a FixedJoint's place an axis: see numeric_kinds.
@@ -527,6 +682,24 @@ _NUMERIC: dict[type, dict[str, str]] = {
     },
     SphereCrankJoint: {"arc": "arc", "ratio": "ratio", "phase": "number"},
     SphereRigidJoint: {"arc": "offset", "angle": "number"},
+    TriadJoint: {
+        "r1": "length",
+        "r2": "length",
+        "r3": "length",
+        "side": "length",
+        "u": "number",
+        "v": "number",
+        "pose": "pose",
+    },
+    SphereTriadJoint: {
+        "r1": "arc",
+        "r2": "arc",
+        "r3": "arc",
+        "side": "arc",
+        "arc": "offset",
+        "angle": "number",
+        "pose": "sphere-pose",
+    },
 }
 _ON_SPHERE: dict[str, str] = {"point": "axis", "length": "arc"}
 # The fields of each spec that name a parent joint (validation checks each is placed before).
@@ -539,12 +712,20 @@ REFERENCES: dict[type, tuple[str, ...]] = {
     HingeJoint: ("z", "y"),
     SphereCrankJoint: ("pivot", "toward"),
     SphereRigidJoint: ("origin", "toward"),
+    TriadJoint: ("p1", "p2", "p3"),
+    SphereTriadJoint: ("p1", "p2", "p3"),
+}
+# The fields of a spec that name the further joints it places (each a new name).
+PLACES: dict[type, tuple[str, ...]] = {
+    HingeJoint: ("far",),
+    TriadJoint: ("j2", "j3"),
+    SphereTriadJoint: ("j2", "j3"),
 }
 
 
 def placed_by(joint: Joint) -> tuple[str, ...]:
-    """The joints a spec places: its name, and a hinge's far joint too."""
-    return joint.placed if isinstance(joint, HingeJoint) else (joint.name,)
+    """The joints a spec places: its name, and a hinge's far joint or a triad's J2 and J3."""
+    return joint.placed if isinstance(joint, HingeJoint | _TriadSpec) else (joint.name,)
 
 
 def numeric_kinds(joint: Joint, space: str) -> dict[str, str]:

@@ -1,12 +1,13 @@
 """Family ``linkage``: a planar or spherical linkage the user composes joint by joint.
 
 A :class:`Linkage` is an ordered tuple of joint specs, each placing one joint from joints listed
-before it (a driven hinge places two), exactly as the engine's construction plans do (see
-DESIGN.md). The specs, in the plane and on the sphere, and their assembly signs are described
-in :mod:`.joints` (:class:`FixedJoint`, :class:`CrankJoint`, :class:`DyadJoint`,
-:class:`SliderJoint`, :class:`RigidJoint`, :class:`HingeJoint`, :class:`SphereCrankJoint`,
-:class:`SphereRigidJoint`); the checks that
-refuse an ill-formed construction are in :mod:`.linkage_checks`. Both are re-exported here.
+before it (a driven hinge places two, a triad three), exactly as the engine's construction
+plans do (see DESIGN.md). The specs, in the plane and on the sphere, and their assembly signs
+are described in :mod:`.joints` (:class:`FixedJoint`, :class:`CrankJoint`, :class:`DyadJoint`,
+:class:`SliderJoint`, :class:`RigidJoint`, :class:`HingeJoint`, :class:`TriadJoint`,
+:class:`SphereCrankJoint`, :class:`SphereRigidJoint`, :class:`SphereTriadJoint`); the checks
+that refuse an ill-formed construction are in :mod:`.linkage_checks`. Both are re-exported
+here.
 
 Mobility, as a sanity line (Grübler: M = 3(n − 1) − 2j for n links and j lower pairs, the same
 count on the sphere, where a body also has three freedoms, its rotations about O): a crank
@@ -14,10 +15,11 @@ adds one link and one pin, and its angle is the input (a second crank is geared 
 one more constraint); a dyad adds two links and three pins, 3·2 − 2·3 = 0; a slider pin adds a
 rod and a block with two pins and one slide, 3·2 − 2·3 = 0 again; a rigid point adds nothing.
 A driven hinge adds three links (z–X, X–H, H–y) and four pins, 3·3 − 2·4 = 1, the freedom its
-angle takes as the input in place of a crank's. So a linkage built this way has exactly one
-degree of freedom: the four-bar (n = 4, j = 4) gives 3·3 − 8 = 1, Jansen's leg (n = 8,
-j = 10) 3·7 − 20 = 1. What a user *can* write wrongly is therefore an ill-formed construction,
-and :class:`Linkage` refuses each kind with one message that names the joint
+angle takes as the input in place of a crank's. A triad adds four links (the ternary and its
+three binaries) and six pins, 3·4 − 2·6 = 0, as a dyad does. So a linkage built this way has
+exactly one degree of freedom: the four-bar (n = 4, j = 4) gives 3·3 − 8 = 1, Jansen's leg
+(n = 8, j = 10) 3·7 − 20 = 1. What a user *can* write wrongly is therefore an ill-formed
+construction, and :class:`Linkage` refuses each kind with one message that names the joint
 (:class:`InvalidLinkage`).
 
 Parameter names are ``"<joint>.<field>"`` (``"B.r1"``, ``"A0.at"``): two linkages of one
@@ -52,11 +54,13 @@ from linkwright.engine import (
 )
 from linkwright.engine.evaluate import batch_shape
 from linkwright.engine.hinge_steps import Hinge, SphereHinge
+from linkwright.engine.triad_steps import SphereTriad, Triad
 from linkwright.geometry import plane, sphere
 from linkwright.mechanisms.base import Mechanism, family_dataclass
 from linkwright.mechanisms.joints import (
     ALL_SPECS,
     JOINT_TYPES,
+    PLACES,
     REFERENCES,
     SPACES,
     SPHERE_JOINT_TYPES,
@@ -70,6 +74,8 @@ from linkwright.mechanisms.joints import (
     SliderJoint,
     SphereCrankJoint,
     SphereRigidJoint,
+    SphereTriadJoint,
+    TriadJoint,
     numeric_kinds,
     placed_by,
     unit_axis,
@@ -78,6 +84,7 @@ from linkwright.mechanisms.linkage_checks import (
     check_bodies,
     check_repeats,
     check_sphere_crank,
+    check_triad,
     checked_number,
     default_toward,
     wrong_space,
@@ -100,6 +107,8 @@ __all__ = [
     "SliderJoint",
     "SphereCrankJoint",
     "SphereRigidJoint",
+    "SphereTriadJoint",
+    "TriadJoint",
     "numeric_kinds",
 ]
 
@@ -118,10 +127,11 @@ class Linkage(Mechanism):
     ----------
     joints : tuple of joint specs
         In the plane :class:`FixedJoint`, :class:`CrankJoint`, :class:`DyadJoint`,
-        :class:`SliderJoint`, :class:`RigidJoint`; on the sphere :class:`FixedJoint`,
-        :class:`SphereCrankJoint`, :class:`DyadJoint`, :class:`SphereRigidJoint`. In
+        :class:`SliderJoint`, :class:`RigidJoint`, :class:`HingeJoint`, :class:`TriadJoint`;
+        on the sphere :class:`FixedJoint`, :class:`SphereCrankJoint`, :class:`DyadJoint`,
+        :class:`SphereRigidJoint`, :class:`HingeJoint`, :class:`SphereTriadJoint`. In
         construction order: each joint is built from joints listed before it. At least one
-        crank; the input θ turns every crank (``phase + ratio·θ``).
+        crank (or one driven hinge); the input θ turns every crank (``phase + ratio·θ``).
     traced : tuple of str, optional
         The joints whose paths are the linkage's curves; the first is the one a tool draws by
         default. Defaults to the last joint. A single name may be given as a string.
@@ -143,7 +153,9 @@ class Linkage(Mechanism):
         axis that is not three numbers or is zero; an arc outside (0, π) (a rigid point's arc
         outside [0, π]); a crank whose pivot or ``toward`` is not a fixed joint (or no fixed
         joint to default ``toward`` to); two fixed joints on one axis (equal or opposite
-        directions); a joint of the other space's kind (a slider above all).
+        directions); a joint of the other space's kind (a slider above all). A triad whose
+        J2 or J3 is not a new name, or whose third joint sits on one of the other two, or whose
+        pose index is not a whole number below its most poses (6; 8 on the sphere).
 
     Examples
     --------
@@ -301,20 +313,27 @@ about the guide's pole; write that DyadJoint instead
                 )
             if type(joint) not in SPACES[space].values():
                 raise InvalidLinkage(wrong_space(joint, space), index=index, joint=name)
-            if isinstance(joint, HingeJoint):
-                far = joint.far
-                if not isinstance(far, str) or not far or far == name or far in seen:
+            others: list[str] = [name]
+            for attr in PLACES.get(type(joint), ()):
+                extra = getattr(joint, attr)
+                if not isinstance(extra, str) or not extra or extra in others or extra in seen:
+                    taken = (
+                        "the hinge's"
+                        if isinstance(joint, HingeJoint)
+                        else " and ".join(repr(n) for n in others)
+                    )
                     what = (
-                        "a non-empty joint name other than the hinge's"
-                        if not isinstance(far, str) or not far or far == name
-                        else f"a new joint's name ({far!r} is listed at joints[{seen[far]}])"
+                        f"a non-empty joint name other than {taken}"
+                        if not isinstance(extra, str) or not extra or extra in others
+                        else f"a new joint's name ({extra!r} is listed at joints[{seen[extra]}])"
                     )
                     raise InvalidLinkage(
-                        f"joint {name!r}: far must be {what}, got {far!r}",
+                        f"joint {name!r}: {attr} must be {what}, got {extra!r}",
                         index=index,
                         joint=name,
-                        field="far",
+                        field=attr,
                     )
+                others.append(extra)
             if isinstance(joint, SphereCrankJoint) and joint.toward is None:
                 joint = replace(joint, toward=default_toward(joint, out, index))
             for attr in REFERENCES[type(joint)]:
@@ -326,9 +345,10 @@ about the guide's pole; write that DyadJoint instead
                         joint=name,
                         field=attr,
                     )
-                if parent == name:
+                if parent in others:
+                    itself = "itself" if parent == name else f"{parent!r}, a joint it places"
                     raise InvalidLinkage(
-                        f"joint {name!r} is built from itself ({attr}); under-constrained",
+                        f"joint {name!r} is built from {itself} ({attr}); under-constrained",
                         index=index,
                         joint=name,
                         field=attr,
@@ -363,7 +383,10 @@ about the guide's pole; write that DyadJoint instead
                 attr: checked_number(joint, index, attr, what)
                 for attr, what in numeric_kinds(joint, space).items()
             }
-            out.append(replace(joint, **values))
+            joint = replace(joint, **values)
+            if isinstance(joint, TriadJoint | SphereTriadJoint):
+                check_triad(joint, index)
+            out.append(joint)
             for placed in placed_by(joint):
                 seen[placed] = index
         hinges = [k for k, j in enumerate(out) if isinstance(j, HingeJoint)]
@@ -489,6 +512,9 @@ about the guide's pole; write that DyadJoint instead
                 sizes.append(np.hypot(j.u, j.v))
             elif isinstance(j, HingeJoint):
                 sizes += [np.asarray(j.r), np.asarray(j.a), np.asarray(j.b)]
+            elif isinstance(j, TriadJoint):
+                sizes += [np.asarray(x) for x in (j.r1, j.r2, j.r3, j.side)]
+                sizes.append(np.hypot(j.u, j.v))
         for i, p in enumerate(pivots):
             sizes += [plane.norm(p - q) for q in pivots[:i]]
         largest: Array = np.maximum.reduce(np.broadcast_arrays(*sizes))
@@ -529,13 +555,17 @@ about the guide's pole; write that DyadJoint instead
         Keys are ``"<joint>.<constraint>"``: a crank's ``length`` and ``angle`` (the arm's
         sideways error against the direction ``phase + ratio·θ``), a dyad's ``r1`` and ``r2``,
         a slider's ``r`` and ``line`` (distance from the guide), a rigid point's ``u`` and ``v``
-        (its local coordinates' errors). Each has the motion's shape; NaN where not assembled.
+        (its local coordinates' errors), a triad's ``r1``, ``r2``, ``r3`` (its three links),
+        ``side`` (J1 to J2) and ``u``, ``v`` (J3's local coordinates), all under its first
+        joint's name. Each has the motion's shape; NaN where not assembled.
 
         On the sphere every error is an arc (radians): a crank's ``arc`` (arc from its pivot
         minus its own) and ``angle`` (its angle about the pivot minus ``phase + ratio·θ``,
         wrapped to (−π, π], times the sine of its arc: the error along its own circle), a
         dyad's ``r1`` and ``r2``, a rigid point's ``point`` (arc from its place on its link),
-        and ``unit``, the largest departure of any joint from the unit sphere.
+        a triad's ``r1``, ``r2``, ``r3``, ``side`` and ``point`` (J3's arc from its place on
+        the ternary link), and ``unit``, the largest departure of any joint from the unit
+        sphere.
         """
         if self.space == "sphere":
             return self._sphere_residuals(motion)
@@ -576,6 +606,15 @@ about the guide's pole; write that DyadJoint instead
                 to_y = (pos[j.y] - pos[n]) / plane.norm(pos[j.y] - pos[n])[..., None]
                 turned = np.cos(phi)[..., None] * to_y + np.sin(phi)[..., None] * plane.perp(to_y)
                 out[f"{n}.angle"] = plane.cross(turned, pos[j.far] - pos[n]) / s
+            elif isinstance(j, TriadJoint):
+                for k, (anchor, joint, length) in enumerate(_triad_links(j), start=1):
+                    out[f"{n}.r{k}"] = dist(anchor, joint, length) / s
+                out[f"{n}.side"] = dist(n, j.j2, j.side) / s
+                o, t = pos[n], pos[j.j2]
+                e = (t - o) / plane.norm(t - o)[..., None]
+                rel = pos[j.j3] - o
+                out[f"{n}.u"] = (plane.dot(rel, e) - np.asarray(j.u)[..., None]) / s
+                out[f"{n}.v"] = (plane.cross(e, rel) - np.asarray(j.v)[..., None]) / s
         return out
 
     def _sphere_residuals(self, motion: Motion) -> dict[str, Array]:
@@ -617,8 +656,19 @@ about the guide's pole; write that DyadJoint instead
                 )
                 wrapped = np.remainder(turned + np.pi, 2 * np.pi) - np.pi
                 out[f"{n}.angle"] = wrapped * np.sin(per_sample(j.a))
+            elif isinstance(j, SphereTriadJoint):
+                for k, (anchor, joint, length) in enumerate(_triad_links(j), start=1):
+                    out[f"{n}.r{k}"] = arc_error(anchor, joint, length)
+                out[f"{n}.side"] = arc_error(n, j.j2, j.side)
+                place = sphere.point_at(pos[n], pos[j.j2], per_sample(j.arc), per_sample(j.angle))
+                out[f"{n}.point"] = sphere.arc(pos[j.j3], place)
         out["unit"] = np.maximum.reduce([np.abs(sphere.norm(p) - 1.0) for p in pos.values()])
         return out
+
+
+def _triad_links(j: TriadJoint | SphereTriadJoint) -> tuple[tuple[str, str, ArrayLike], ...]:
+    """A triad's three binary links: (anchor, joint, length)."""
+    return ((j.p1, j.name, j.r1), (j.p2, j.j2, j.r2), (j.p3, j.j3, j.r3))
 
 
 def _compile(
@@ -673,6 +723,16 @@ def _compile(
             steps.append(
                 kind(n, j.far, j.z, key("r"), j.y, key("a"), key("b"), key("phase"), f"{n}.pose")
             )
+        elif isinstance(j, TriadJoint | SphereTriadJoint):
+            placed = (n, j.j2, j.j3)
+            anchors = (j.p1, j.p2, j.p3)
+            lengths = (key("r1"), key("r2"), key("r3"))
+            if isinstance(j, SphereTriadJoint):
+                body = (key("side"), key("arc"), key("angle"))
+                steps.append(SphereTriad(placed, anchors, lengths, *body, pose=key("pose")))
+            else:
+                body = (key("side"), key("u"), key("v"))
+                steps.append(Triad(placed, anchors, lengths, *body, pose=key("pose")))
         else:
             steps.append(Rigid(n, j.origin, j.toward, key("u"), key("v")))
     return tuple(steps), params, frozenset(points)

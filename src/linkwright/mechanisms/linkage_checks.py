@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from linkwright.engine.sphere_triad import MAX_POSES as SPHERE_POSES
+from linkwright.engine.triad import MAX_POSES as PLANE_POSES
 from linkwright.geometry import sphere
 from linkwright.mechanisms.joints import (
     CrankJoint,
@@ -28,6 +30,8 @@ from linkwright.mechanisms.joints import (
     SliderJoint,
     SphereCrankJoint,
     SphereRigidJoint,
+    SphereTriadJoint,
+    TriadJoint,
     unit_axis,
 )
 
@@ -35,6 +39,7 @@ __all__ = [
     "check_bodies",
     "check_repeats",
     "check_sphere_crank",
+    "check_triad",
     "checked_number",
     "default_toward",
     "wrong_space",
@@ -55,7 +60,7 @@ def _show(value: Array, bad: NDArray[np.bool_]) -> str:
 
 def checked_number(joint: Joint, index: int, attr: str, what: str) -> Array:
     """The field as a float array, checked for ``what`` (point, axis, length, arc, offset,
-    ratio, sign, number)."""
+    ratio, sign, pose, sphere-pose, number)."""
     name = joint.name
 
     def fail(problem: str) -> InvalidLinkage:
@@ -100,7 +105,19 @@ def checked_number(joint: Joint, index: int, attr: str, what: str) -> Array:
         raise fail("must be nonzero (a crank with ratio 0 does not turn, so it drives nothing)")
     if what == "sign" and not np.all(np.abs(value) == 1):
         raise fail(f"must be 1 or -1, got {_show(value, np.abs(value) != 1)}")
+    if what in _POSES:
+        most = _POSES[what]
+        off = (value != np.round(value)) | (value < 0) | (value >= most)
+        if np.any(off):
+            raise fail(
+                f"must be a whole number from 0 to {most - 1} (the triad's pose index), got "
+                f"{_show(value, off)}"
+            )
     return value
+
+
+_POSES = {"pose": PLANE_POSES, "sphere-pose": SPHERE_POSES}
+"""A triad's pose index runs below its most poses: 6 in the plane, 8 on the sphere."""
 
 
 def wrong_space(joint: Joint, space: str) -> str:
@@ -116,6 +133,7 @@ def wrong_space(joint: Joint, space: str) -> str:
         instead = {
             CrankJoint: "SphereCrankJoint (an arc, and the fixed joint its angle starts towards)",
             RigidJoint: "SphereRigidJoint (an arc and an angle from the link)",
+            TriadJoint: "SphereTriadJoint (arcs, and its third joint by an arc and an angle)",
         }[type(joint)]
         return (
             f"joint {name!r} is a planar {type(joint).__name__}, but this linkage is spherical: "
@@ -172,6 +190,38 @@ def check_sphere_crank(
         )
 
 
+def check_triad(joint: TriadJoint | SphereTriadJoint, index: int) -> None:
+    """A triad's ternary link carries three distinct joints.
+
+    With J3 on J1 (or on J2) the link is binary and its two links to the anchors make a dyad:
+    the triad's polynomial then has a continuum of roots or none, and the dyad is what to
+    write. On the sphere J3 opposite J1 (arc π) is on J1's axis, the same revolute.
+    """
+    name = joint.name
+    if isinstance(joint, TriadJoint):
+        u, v, side = (np.asarray(x) for x in (joint.u, joint.v, joint.side))
+        on = {"J1": (u == 0) & (v == 0), "J2": (u == side) & (v == 0)}
+        attr = "u"
+    else:
+        arc, angle, side = (np.asarray(x) for x in (joint.arc, joint.angle, joint.side))
+        turned = np.remainder(angle, 2 * np.pi)
+        on = {
+            "J1": (arc == 0) | (arc == np.pi),
+            "J2": (arc == side) & ((turned == 0) | (turned == 2 * np.pi)),
+        }
+        attr = "arc"
+    for which, bad in on.items():
+        if np.any(bad):
+            raise InvalidLinkage(
+                f"joint {name!r}: its third joint {joint.j3!r} is placed on {which} "
+                f"({joint.placed[0 if which == 'J1' else 1]!r}), so the link carries two joints, "
+                "not three; a joint held by two links is a dyad (rrr): write that instead",
+                index=index,
+                joint=name,
+                field=attr,
+            )
+
+
 # --------------------------------------------------------------------------------------------
 # The family
 # --------------------------------------------------------------------------------------------
@@ -201,6 +251,10 @@ def check_bodies(joints: tuple[Joint, ...]) -> None:
                 clusters += [{j.p1, j.name}, {j.p2, j.name}]
         elif isinstance(j, HingeJoint):
             clusters += [{j.z, j.far}, {j.far, j.name}, {j.name, j.y}]
+        elif isinstance(j, TriadJoint | SphereTriadJoint):
+            # Three binary links and the ternary link (ground anchors do not join them: each
+            # binary turns about its anchor).
+            clusters += [{j.p1, j.name}, {j.p2, j.j2}, {j.p3, j.j3}, {j.name, j.j2, j.j3}]
         elif isinstance(j, SliderJoint):
             # The guide keeps its direction, so only a grounded rod on a grounded guide is rigid
             # with anything beyond the rod itself.
@@ -241,6 +295,10 @@ def _construction(j: Joint, space: str) -> tuple[tuple[Any, ...], ...]:
         return (("rrp", j.p1, j.r, j.line_point, j.line_angle, j.assembly),)
     if isinstance(j, HingeJoint):
         return (("hinge", j.z, j.r, j.y, j.a, j.b, j.phase, j.assembly),)
+    if isinstance(j, TriadJoint):
+        return (("triad", j.p1, j.r1, j.p2, j.r2, j.p3, j.r3, j.side, j.u, j.v, j.pose),)
+    if isinstance(j, SphereTriadJoint):
+        return (("triad", j.p1, j.r1, j.p2, j.r2, j.p3, j.r3, j.side, j.arc, j.angle, j.pose),)
     if isinstance(j, SphereRigidJoint):
         return (("rigid", j.origin, j.toward, j.arc, j.angle),)
     return (("rigid", j.origin, j.toward, j.u, j.v),)

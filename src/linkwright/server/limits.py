@@ -24,6 +24,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from linkwright.engine import cost as _cost
+from linkwright.io import sketch_checks as _sketch
 
 # Measured on the bytes in one linear pass (its own module: see there why not a regex).
 from linkwright.server.scan import json_depth
@@ -46,6 +47,10 @@ __all__ = [
     "REQUEST_SECONDS",
     "REQUEST_WORK",
     "SAMPLES",
+    "SKETCH_DRIVERS",
+    "SKETCH_JOINTS",
+    "SKETCH_LINKS",
+    "SKETCH_LINK_JOINTS",
     "STUDY_STEPS",
     "TEXT",
     "TITLE",
@@ -277,6 +282,42 @@ REFINE_POINTS = Limit(
     _cost.REFINE_POINTS.why,
 )
 
+# A drawing's sizes (POST /api/sketch): the compiler's own bounds, in linkwright.io.sketch_checks.
+SKETCH_JOINTS = Limit(
+    "sketch_joints",
+    _sketch.MAX_JOINTS,
+    "joints",
+    "sketch.joints, with the ground pivot each slider's guide may add (a drawing over it is "
+    "answered status invalid)",
+    "The linkage document a drawing compiles to must fit document_list (32 joints); the "
+    "compile places each joint once and checks the linkage at 28 inputs: a chain of 15 dyads "
+    "on 32 joints takes about 6 ms.",
+)
+SKETCH_LINKS = Limit(
+    "sketch_links",
+    _sketch.MAX_LINKS,
+    "links",
+    "sketch.links",
+    "Twice the joints, more than a linkage of one degree of freedom needs (a four-bar has 3 "
+    "links on 4 joints, Jansen's leg 7 on 8).",
+)
+SKETCH_LINK_JOINTS = Limit(
+    "sketch_link_joints",
+    _sketch.MAX_LINK_JOINTS,
+    "joints",
+    "each link of sketch.links",
+    "A ternary link has 3 joints and a plate carrying a row of points a few more; each pair of "
+    "a link's joints is checked at every input, so the bound keeps that square small.",
+)
+SKETCH_DRIVERS = Limit(
+    "sketch_drivers",
+    _sketch.MAX_DRIVERS,
+    "drivers",
+    "sketch.drivers (the input crank and the cranks geared to it)",
+    "A gear train of eight cranks is more than any drawn linkage uses; each further driver is "
+    "one more gear pair to trace.",
+)
+
 LIMITS: dict[str, Limit] = {
     limit.name: limit
     for limit in (
@@ -302,6 +343,10 @@ LIMITS: dict[str, Limit] = {
         REQUEST_SECONDS,
         GEAR_TURNS,
         REFINE_POINTS,
+        SKETCH_JOINTS,
+        SKETCH_LINKS,
+        SKETCH_LINK_JOINTS,
+        SKETCH_DRIVERS,
     )
 }
 """Every limit by name (what ``GET /api/limits`` serves)."""

@@ -36,6 +36,7 @@ __all__ = [
     "MAX_MODES",
     "assembly_modes",
     "circuit_json",
+    "continuous_degrees",
     "limit_steps",
     "map_centre",
     "planned_modes",
@@ -84,7 +85,7 @@ def assembly_modes(doc: Document) -> list[tuple[str, dict[str, int], Document, b
     return out
 
 
-def _degrees(theta: np.ndarray) -> np.ndarray:
+def continuous_degrees(theta: np.ndarray) -> np.ndarray:
     """Continuous degrees along a circuit, the first sample in [−180°, 180°)."""
     t = np.asarray(theta, dtype=float)
     ok = np.isfinite(t)
@@ -131,7 +132,7 @@ def circuit_json(
 ) -> tuple[dict[str, Any], list[tuple[int, float, str]]]:
     """One traced circuit's JSON body, and its limit positions (sample index, input in degrees,
     why the input turns back there)."""
-    theta = _degrees(motion.input)
+    theta = continuous_degrees(motion.input)
     limits: list[tuple[int, float, str]] = []
     if not full:
         # The step back to the start is taken within one turn: a triad's circuit may close a

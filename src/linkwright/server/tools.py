@@ -10,14 +10,20 @@ Routes (mounted under ``/api`` by :func:`linkwright.server.create_app`):
   pivot's own document field. A step whose linkage assembles nowhere is reported (``full``
   false, no curve), not refused.
 - ``POST /match`` (with ``GET /match/status`` and ``POST /match/prepare``): match a drawn
-  closed curve against the built-in four-bar atlas (:mod:`linkwright.atlas`), optionally
-  refined; each candidate comes placed where the curve was drawn. The atlas is built into the
-  app's data directory on first use (:func:`atlas_count` entries) unless a finished four-bar
-  atlas is already there (the CLI's built-in one is found and used).
+  closed curve against the built-in four-bar atlas (:mod:`linkwright.atlas`), or a curve drawn
+  on the sphere (rows of three numbers) against a spherical four-bar atlas, optionally
+  refined; each candidate comes placed where the curve was drawn. Each atlas is built into the
+  app's data directory on first use (:func:`atlas_count` entries) unless a finished one is
+  already there (the CLI's built-in four-bar atlas is found and used).
 - ``POST /ellipse`` and ``POST /ellipse/trammel``: fit an ellipse to drawn points and browse
   paper 004's ∞² family of double sliders (elliptic trammels) that trace it
   (:mod:`linkwright.synthesis.ellipse`), each member checked against the ellipse.
 - ``POST /export/{fmt}``: the current document as PNG, SVG, DXF, CSV, GIF, TOML or JSON.
+- ``POST /sketch`` and ``POST /sketch/from-document``: the builder's drawing compiled to a
+  linkage document (its degrees of freedom, and what it lacks, said in one sentence), and a
+  document's drawing (:mod:`~linkwright.server.tools_sketch`).
+- ``POST /forces``: the driving torque and every joint's reaction along the circuits a scene
+  draws, at the page's input speed, for the forces panel (:mod:`~linkwright.server.forces_panel`).
 
 Every problem a user can cause raises a ``ValueError`` subclass with one line naming the field,
 which the app answers as 422 ``{"error": ...}``; no answer carries NaN (a point that cannot be
@@ -33,7 +39,14 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from linkwright.server import tools_ellipse, tools_export, tools_match, tools_study
+from linkwright.server import (
+    forces_panel,
+    tools_ellipse,
+    tools_export,
+    tools_match,
+    tools_sketch,
+    tools_study,
+)
 from linkwright.server.tools_common import MAX_POINTS, ToolsError
 from linkwright.server.tools_common import Array as Array
 from linkwright.server.tools_common import Points as Points
@@ -80,3 +93,5 @@ router.include_router(tools_study.router)
 router.include_router(tools_match.router)
 router.include_router(tools_ellipse.router)
 router.include_router(tools_export.router)
+router.include_router(tools_sketch.router)
+router.include_router(forces_panel.router)

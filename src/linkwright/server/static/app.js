@@ -20,6 +20,12 @@ import { explainError } from "./fields.js";
 import { checkpoint, historyInfo, initHistory, markLoaded, redoStep, undoStep } from "./history.js";
 import { initShare, openFirst, shareLink } from "./share.js";
 import { initOverlays } from "./overlays.js";
+import { initForces } from "./forces.js";
+import {
+  builderKey, builderPointerDown, builderPointerMove, builderPointerUp, initBuilder, refitSketch,
+} from "./builder.js";
+import { sketchToScreen } from "./builder_draw.js";
+import { initHelp } from "./help.js";
 
 // ------------------------------------------------------------------ pointer interaction
 function canvasPoint(e) {
@@ -63,12 +69,65 @@ function modelAt(q) {
   return fromScreenPlane(q);
 }
 
+const viewSpace = () =>
+  state.sketch ? (state.sketch.space === "sphere" ? "sphere" : "plane") : state.scene && state.scene.space;
+
+// Two fingers on the canvas pinch: the view scales about their midpoint (the sphere zooms).
+const touches = new Map();
+let pinchLast = null;
+
+function pinchSpan() {
+  const [a, b] = [...touches.values()];
+  return { d: Math.hypot(a[0] - b[0], a[1] - b[1]), mid: [(a[0] + b[0]) / 2, (a[1] + b[1]) / 2] };
+}
+
+function trackTouch(e, phase) {
+  if (e.pointerType !== "touch") return false;
+  if (phase === "up") {
+    touches.delete(e.pointerId);
+    if (touches.size < 2) pinchLast = null;
+    return false;
+  }
+  touches.set(e.pointerId, canvasPoint(e));
+  if (touches.size !== 2) return false;
+  const now = pinchSpan();
+  if (phase === "down" || !pinchLast) {
+    pinchLast = now;
+    state.gesture = null;
+    return true;
+  }
+  const f = clamp(now.d / Math.max(pinchLast.d, 1), 0.5, 2);
+  zoomBy(f, now.mid);
+  pinchLast = now;
+  return true;
+}
+
+function zoomBy(f, q) {
+  if (viewSpace() === "sphere") {
+    state.sphere.zoom = clamp(state.sphere.zoom * f, 0.3, 6);
+  } else {
+    const m = fromScreenPlane(q);
+    state.view.s = clamp(state.view.s * f, 1e-6, 1e9);
+    state.view.ox = q[0] - state.view.s * m[0];
+    state.view.oy = q[1] + state.view.s * m[1];
+    state.view.moved = true;
+  }
+  requestDraw();
+}
+
 function onPointerDown(e) {
-  if (e.button !== 0 || !state.scene) return;
+  if (trackTouch(e, "down")) return;
+  if (e.button !== 0 || !(state.scene || state.sketch)) return;
   const cv = drawing();
   cv.focus({ preventScroll: true });
   const q = canvasPoint(e);
   cv.setPointerCapture(e.pointerId);
+  if (state.sketch) {
+    if (builderPointerDown(q)) state.gesture = { kind: "build" };
+    else state.gesture = { kind: viewSpace() === "sphere" ? "turn" : "pan", last: q, start: q };
+    e.preventDefault();
+    return;
+  }
   if (state.pick) {
     state.pick.points = [modelAt(q)];
     state.gesture = { kind: "pick", last: q };
@@ -90,9 +149,14 @@ function onPointerDown(e) {
 }
 
 function onPointerMove(e) {
+  if (trackTouch(e, "move")) return;
   const q = canvasPoint(e);
   const g = state.gesture;
   const cv = drawing();
+  if (state.sketch && (!g || g.kind === "build")) {
+    builderPointerMove(q, !!g);
+    return;
+  }
   if (!g) {
     const h = hitHandle(q);
     if (h !== state.hoverHandle) {
@@ -135,12 +199,17 @@ function onPointerMove(e) {
 }
 
 function onPointerUp(e) {
+  trackTouch(e, "up");
   const g = state.gesture;
   const cv = drawing();
   if (cv.hasPointerCapture && cv.hasPointerCapture(e.pointerId)) cv.releasePointerCapture(e.pointerId);
   state.gesture = null;
   cv.className = state.pick ? "picking" : "";
   if (!g) return;
+  if (g.kind === "build") {
+    builderPointerUp();
+    return;
+  }
   if (g.kind === "pick") {
     const pts = state.pick.points || [];
     const fn = state.pick.fn;
@@ -194,20 +263,9 @@ function pumpDrag() {
 }
 
 function onWheel(e) {
-  if (!state.scene) return;
+  if (!state.scene && !state.sketch) return;
   e.preventDefault();
-  const f = Math.exp(-clamp(e.deltaY, -200, 200) * 0.0015);
-  if (state.scene.space === "sphere") {
-    state.sphere.zoom = clamp(state.sphere.zoom * f, 0.3, 6);
-  } else {
-    const q = canvasPoint(e);
-    const m = fromScreenPlane(q);
-    state.view.s = clamp(state.view.s * f, 1e-6, 1e9);
-    state.view.ox = q[0] - state.view.s * m[0];
-    state.view.oy = q[1] + state.view.s * m[1];
-    state.view.moved = true;
-  }
-  requestDraw();
+  zoomBy(Math.exp(-clamp(e.deltaY, -200, 200) * 0.0015), canvasPoint(e));
 }
 
 function showTooltip(q, text) {
@@ -226,6 +284,11 @@ export function hideTooltip() {
 
 function fit() {
   const sc = state.scene;
+  if (state.sketch) {
+    refitSketch();
+    drawAll();
+    return;
+  }
   if (!sc) return;
   if (sc.space === "sphere") {
     resetSphere(sc);
@@ -240,6 +303,10 @@ function onKey(e) {
   const tag = t && t.tagName;
   if (tag === "INPUT" || tag === "SELECT" || tag === "TEXTAREA" || (t && t.isContentEditable)) return;
   if (e.ctrlKey || e.metaKey || e.altKey) return;
+  if (state.sketch && builderKey(e)) {
+    e.preventDefault();
+    return;
+  }
   if (e.key === " " || e.code === "Space") {
     e.preventDefault();
     setPlaying(!state.playing);
@@ -350,7 +417,7 @@ const lw = {
   cancelPick,
   status,
   api,
-  toScreen: (p) => toScreen(p),
+  toScreen: (p) => (state.sketch ? sketchToScreen(state.sketch, p).slice(0, 2) : toScreen(p)),
   fromScreen: (q) => modelAt(q),
   fit,
   play: () => setPlaying(true),
@@ -362,7 +429,11 @@ const lw = {
     origin: [state.view.ox, state.view.oy],
     rotation: state.sphere.R.slice(),
     zoom: state.sphere.zoom,
+    disc: sphereGeom(),
   }),
+  // builder.js: the drawing being built and the server's word on it (null when not building)
+  sketch: () => clone(state.sketch),
+  sketchReport: () => clone(state.sketchReport),
   refresh: () => requestScene(clone(state.latestRequested || state.doc), state.at),
   // history.js and share.js: undo, redo, the state of the history, a link to this state
   undo: undoStep,
@@ -449,6 +520,9 @@ function wire() {
   initHistory();
   initShare();
   initOverlays();
+  initForces();
+  initBuilder();
+  initHelp();
   setupTabs();
   new ResizeObserver(() => onResize()).observe($("stage"));
 }

@@ -10,17 +10,20 @@ import { modeStyle, ownLimits } from "./panels.js";
 import { drawMap, drawSphere } from "./sphere.js";
 import { drawChartsCursor } from "./charts.js";
 import { drawMotionOverlays } from "./overlays.js";
+import { drawBuilder } from "./builder.js";
 
 // ------------------------------------------------------------------ views
 export const drawing = () => $("drawing");
 
 export function layoutStage() {
   const sc = state.scene;
-  const sphere = !!sc && sc.space === "sphere";
-  $("map-wrap").hidden = !sphere;
+  const building = !!state.sketch;
+  const sphere = building ? state.sketch.space === "sphere" : !!sc && sc.space === "sphere";
+  $("map-wrap").hidden = !sphere || building;
   const stage = $("stage");
   stage.classList.toggle("column", sphere && stage.clientHeight > stage.clientWidth * 0.95);
   drawing().dataset.view = sphere ? "sphere" : "plane";
+  if (building) return; // the builder's hint names its tool
   $("hint").textContent = sphere
     ? "drag a joint to move it · drag the sphere to turn it · wheel: zoom"
     : "drag a joint to move it · drag empty space to pan · wheel: zoom";
@@ -164,6 +167,12 @@ export function drawDragPointer(ctx) {
 export function drawAll() {
   const sc = state.scene;
   const msg = $("canvas-message");
+  if (state.sketch) {
+    msg.hidden = true;
+    drawBuilder();
+    drawChartsCursor();
+    return;
+  }
   if (sc && (!sc.modes || !sc.modes.length || (!state.cur && !sc.pose))) {
     msg.textContent = sc.message || "This linkage does not assemble at any input.";
     msg.hidden = false;
@@ -238,7 +247,7 @@ export function limitPose(sc, k) {
 }
 
 // ------------------------------------------------------------------ drawing: plane
-function drawGrid(ctx, w, h) {
+export function drawGrid(ctx, w, h) {
   const v = state.view;
   const step = niceStep(90 / v.s, 1);
   const [mx0, my1] = fromScreenPlane([0, 0]);

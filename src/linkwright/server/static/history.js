@@ -14,6 +14,7 @@ import { $, clone, finite } from "./util.js";
 import { requestScene, state, status } from "./pipeline.js";
 import { fieldIsBeingEdited, labelOf } from "./fields.js";
 import { captureSession } from "./share.js";
+import { restoreSketch } from "./builder.js";
 
 // Enough for an afternoon of edits; a document is a few hundred bytes to a few kilobytes, but
 // may be up to the server's 2 MB, so the steps' total size is bounded too.
@@ -44,8 +45,23 @@ function flatten(x, prefix, out) {
   return out;
 }
 
+/** The identity of what is on screen: the document, and the sketch while one is being built
+ * (a sketch that does not compile yet leaves the last document that did). */
+export function sessionKey() {
+  return keyOf(state.doc, state.sketch);
+}
+
+export function keyOf(doc, sketch) {
+  const d = doc ? docKey(doc) : "";
+  return sketch ? `${d}\u0000${docKey(sketch)}` : d;
+}
+
 /** What changed from one step to the next, in the fields' words ("crank", "point u, point v"). */
 function changeLabel(prev, next) {
+  if (prev.sketchKey !== next.sketchKey) {
+    if (!next.sketch) return "leaving the builder";
+    return `building: ${next.sketchLabel || "an edit"}`;
+  }
   const fam = (s) => s.doc && s.doc.mechanism && s.doc.mechanism.family;
   if (fam(prev) !== fam(next) || prev.exampleName !== next.exampleName) {
     const title = next.doc.title || next.exampleName || fam(next) || "mechanism";
@@ -66,7 +82,7 @@ function changeLabel(prev, next) {
 export function checkpoint() {
   const doc = state.doc;
   if (!doc || restoreCount) return;
-  const key = docKey(doc);
+  const key = sessionKey();
   const head = undoSteps[undoIndex];
   if (head && head.key === key) {
     head.exampleName = state.exampleName;
@@ -79,6 +95,9 @@ export function checkpoint() {
     at: state.at,
     family: state.scene ? state.scene.family : null,
     label: "",
+    sketch: state.sketch ? clone(state.sketch) : null,
+    sketchKey: state.sketch ? docKey(state.sketch) : null,
+    sketchLabel: state.sketchLabel || "",
   };
   if (head) step.label = changeLabel(head, step);
   undoSteps.splice(undoIndex + 1);
@@ -112,13 +131,15 @@ async function goToStep(i, verb) {
   const other = !state.scene || state.scene.family !== to.family;
   const at = other && finite(to.at) ? to.at : state.at;
   let sc = null;
+  // the sketch first: the scene's listeners then see the step whole
+  if (from.sketchKey !== to.sketchKey) restoreSketch(to.sketch);
   try {
     sc = await requestScene(clone(to.doc), at, { exampleName: to.exampleName });
   } finally {
     restoreCount -= 1;
   }
   if (restoreCount) return; // a later undo or redo is on its way and will settle the history
-  const key = state.doc ? docKey(state.doc) : null;
+  const key = state.doc ? sessionKey() : null;
   if (key !== undoSteps[undoIndex].key) {
     // refused (the status line says why): the history follows what is on screen
     const j = undoSteps.findIndex((s) => s.key === key);
@@ -145,12 +166,12 @@ export function historyInfo() {
 }
 
 export function isDirty() {
-  return !!state.doc && baselineKey !== null && docKey(state.doc) !== baselineKey;
+  return !!state.doc && baselineKey !== null && sessionKey() !== baselineKey;
 }
 
 /** The document on screen was just loaded (an example, a family, a link) or saved. */
 export function markLoaded() {
-  if (state.doc) baselineKey = docKey(state.doc);
+  if (state.doc) baselineKey = sessionKey();
   saveWork();
 }
 

@@ -274,6 +274,12 @@ function drawAxesSphere(ctx, sc, sample, g) {
   return n;
 }
 
+// Other modules' drawings over the linkage (forces.js's arrows), drawn after these each time.
+const ovLayers = [];
+export function addOverlayLayer(fn) {
+  ovLayers.push(fn);
+}
+
 /** Draw the toggled overlays over the drawing just drawn (called by draw.js's drawAll). */
 export function drawMotionOverlays() {
   const sc = state.scene;
@@ -300,6 +306,7 @@ export function drawMotionOverlays() {
   const cv = drawing();
   cv.dataset.arrows = String(drawn.velocity + drawn.acceleration);
   cv.dataset.centres = String(drawn.centres + drawn.axes);
+  for (const layer of ovLayers) layer();
   renderReadout(sc, sample);
 }
 

@@ -121,7 +121,10 @@ function groupOf(f, doc) {
 export function renderFields(sc) {
   const form = $("fields");
   const fields = sc.fields || [];
-  const sig = fields.map((f) => `${f.path}:${f.kind}:${(f.choices || []).join(",")}`).join("|");
+  // labels and groups too: two linkages with joints in the same slots may name them otherwise
+  const sig = fields
+    .map((f) => `${f.path}:${f.kind}:${f.label}:${groupOf(f, sc.document)}:${(f.choices || []).join(",")}`)
+    .join("|");
   if (sig !== state.fieldSig) {
     state.fieldSig = sig;
     form.innerHTML = "";

@@ -45,6 +45,9 @@ export const state = {
   charts: [],
   dragPipe: null,
   dragGhost: null,
+  sketch: null, // the sketch being built (builder.js), or null
+  sketchReport: null, // the server's word on it: degrees of freedom, status, message
+  sketchLabel: "", // the last building edit, in words, for the history
 };
 
 export function emit(name, arg) {
@@ -268,7 +271,8 @@ function applyScene(sc, job) {
   markField(null);
   placeCursor(sc, locate(sc, finite(sc.at) ? sc.at : job.at, freshKind || job.fit ? null : previous));
   state.map.basis = sc.space === "sphere" ? fitMapBasis(sc) : null;
-  if (freshKind || job.fit) {
+  // while building, the view is the sketch's: a linkage compiled from it must not move it
+  if ((freshKind || job.fit) && !state.sketch) {
     state.view.fitted = false;
     state.view.moved = false;
     if (sc.space === "sphere") resetSphere(sc);

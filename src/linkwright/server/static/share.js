@@ -15,7 +15,8 @@ import { $, clamp, clone, finite, okPoint } from "./util.js";
 import { angDist, emit, ownModeIndex, placeCursor, requestScene, state, status } from "./pipeline.js";
 import { loadExample, loadFamily, updateAtUI } from "./panels.js";
 import { drawAll, drawing, fromScreenPlane } from "./draw.js";
-import { docKey, markLoaded, offerAction, readWork, setBaseline } from "./history.js";
+import { keyOf, markLoaded, offerAction, readWork, sessionKey, setBaseline } from "./history.js";
+import { restoreSketch } from "./builder.js";
 
 const LINK_PREFIX = "#s=";
 const STATE_VERSION = 1;
@@ -29,11 +30,13 @@ const DEFAULT_EXAMPLE = "crank-rocker";
 /** The page's state as a link carries it (and as history.js keeps it for a reload). */
 export function captureSession() {
   const out = { v: STATE_VERSION, d: clone(state.doc) };
+  if (state.sketch) out.k = clone(state.sketch);
   if (state.exampleName) out.e = state.exampleName;
   if (finite(state.at)) out.a = state.at;
   if (state.cur) out.c = [state.cur.circuit, state.cur.index];
   const sc = state.scene;
-  if (sc && sc.space === "sphere") {
+  const sphereView = state.sketch ? state.sketch.space === "sphere" : sc && sc.space === "sphere";
+  if (sphereView) {
     out.w = { r: state.sphere.R.slice(), z: state.sphere.zoom, m: state.map.zoom };
   } else if (state.view.moved) {
     // the centre, not the pixel origin: a window of another size shows the same place
@@ -41,6 +44,10 @@ export function captureSession() {
     out.w = { s: state.view.s, c: fromScreenPlane([cv.clientWidth / 2, cv.clientHeight / 2]) };
   } // else the view was fitted, and is fitted again
   return out;
+}
+
+function isSketch(k) {
+  return !!k && typeof k === "object" && !Array.isArray(k) && Array.isArray(k.joints) && Array.isArray(k.links);
 }
 
 function isRotation(r) {
@@ -96,9 +103,15 @@ function applyCircuit(c, at, sc) {
 export async function restoreSession(snap) {
   const at = finite(snap.a) ? snap.a : null;
   const exampleName = typeof snap.e === "string" ? snap.e : null;
+  const sketch = isSketch(snap.k) ? snap.k : null;
+  // the drawing first: the history's first step then holds it with the document
+  restoreSketch(sketch);
   const sc = await requestScene(clone(snap.d), at, { fit: true, exampleName });
-  if (!sc) return false;
-  applyView(snap.w, sc);
+  if (!sc) {
+    restoreSketch(null);
+    return false;
+  }
+  applyView(snap.w, sketch ? { space: sketch.space === "sphere" ? "sphere" : "plane" } : sc);
   applyCircuit(snap.c, at, sc);
   drawAll();
   return true;
@@ -329,7 +342,7 @@ async function restoreWork(work) {
     return;
   }
   setBaseline(work.baseline);
-  const unsaved = docKey(state.doc) !== work.baseline;
+  const unsaved = sessionKey() !== work.baseline;
   status(unsaved ? "Restored your unsaved work" : "Restored your last session", "info");
   const ex = work.session.e;
   const known = typeof ex === "string" && state.examples.some((e) => e.name === ex);
@@ -363,7 +376,7 @@ export async function openFirst() {
   else await openDefault();
   if (name && !known) {
     status(`There is no example “${shortName(name)}”; showing the default example`, "error");
-  } else if (work && docKey(work.session.d) !== work.baseline) {
+  } else if (work && keyOf(work.session.d, work.session.k) !== work.baseline) {
     // the address asked for another example: the earlier work is one click away, not lost
     offerAction("restore your unsaved work", () => restoreWork(work));
   }

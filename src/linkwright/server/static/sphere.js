@@ -13,7 +13,7 @@ import {
 
 // ------------------------------------------------------------------ drawing: sphere
 /** Split a projected polyline into runs on the front (z ≥ 0) or back of the sphere. */
-function strokeSide(ctx, proj, front) {
+export function strokeSide(ctx, proj, front) {
   ctx.beginPath();
   let open = false;
   for (let i = 0; i + 1 < proj.length; i++) {
@@ -51,7 +51,7 @@ function graticule() {
   }
   return lines;
 }
-const GRATICULE = graticule();
+export const GRATICULE = graticule();
 
 function sphereCurves(sc, g) {
   // [{proj, colour, width, dash, alpha}] for every traced curve of every mode

@@ -211,8 +211,9 @@
     }
   }
 
-  /** x, y rows from CSV text: a header line and '#' comments allowed; anything else must be
-   * two numbers per line. Throws an Error naming the line. */
+  /** x, y rows from CSV text (or x, y, z rows: directions on the sphere): a header line and '#'
+   * comments allowed; every other line has as many numbers as the first. Throws an Error naming
+   * the line. */
   function parseCsv(text) {
     const points = [];
     const lines = String(text).split(/\r\n|\n|\r/);
@@ -224,7 +225,8 @@
       const nums = cells.map(Number);
       const numeric = cells.every((c, j) => c !== "" && Number.isFinite(nums[j]));
       if (!numeric) {
-        if (!seenData && points.length === 0 && cells.length === 2 && !cells.some((c) => Number.isFinite(Number(c)))) {
+        if (!seenData && points.length === 0 && (cells.length === 2 || cells.length === 3)
+          && !cells.some((c) => Number.isFinite(Number(c)))) {
           seenData = true; // the header
           continue;
         }
@@ -232,10 +234,12 @@
         throw new Error(`CSV line ${i + 1}: ${JSON.stringify(bad)} is not a number (expected x, y)`);
       }
       seenData = true;
-      if (cells.length !== 2) {
-        throw new Error(`CSV line ${i + 1}: ${cells.length} values; each line must be x, y`);
+      const width = points.length ? points[0].length : cells.length;
+      if (cells.length !== width || (width !== 2 && width !== 3)) {
+        const want = width === 3 ? "x, y, z (as the first line)" : "x, y (x, y, z on the sphere)";
+        throw new Error(`CSV line ${i + 1}: ${cells.length} values; each line must be ${want}`);
       }
-      points.push([nums[0], nums[1]]);
+      points.push(nums);
     }
     if (points.length < 5) {
       throw new Error(`CSV: ${points.length} points; a curve needs at least 5 (8 to match)`);
@@ -713,7 +717,8 @@
     let target = null;
     let ellipse = null;
     let polling = null;
-    let prepared = false;
+    const prepared = {}; // by space: the plane's four-bar atlas, the sphere's spherical one
+    let atlasSpace = "plane"; // the atlas the status line speaks of
     let trammelSeq = 0;
     let trammelTimer = null;
 
@@ -723,7 +728,7 @@
         label: "target curve" });
       targetInfo.textContent = `${points.length} points (${source}); the curve is taken as closed.`;
       matchBtn.disabled = points.length < 8;
-      fitBtn.disabled = points.length < 5;
+      fitBtn.disabled = points.length < 5 || points[0].length !== 2; // an ellipse is planar
       candidates.replaceChildren();
       root.dataset.target = String(points.length);
     }
@@ -774,11 +779,13 @@
     function showAtlas(st) {
       if (!st) return;
       root.dataset.atlas = st.state;
+      root.dataset.atlasSpace = atlasSpace;
+      const kind = atlasSpace === "sphere" ? "spherical four-bar" : "four-bar";
       if (st.state === "building") {
-        atlasInfo.textContent = `Building the four-bar atlas… ${Math.round(100 * (st.progress || 0))} %`
+        atlasInfo.textContent = `Building the ${kind} atlas… ${Math.round(100 * (st.progress || 0))} %`
           + " (first use only)";
       } else if (st.state === "ready") {
-        atlasInfo.textContent = `Atlas: ${(st.count || 0).toLocaleString("en")} four-bars.`;
+        atlasInfo.textContent = `Atlas: ${(st.count || 0).toLocaleString("en")} ${kind}s.`;
       } else if (st.state === "error") {
         atlasInfo.textContent = st.error || "the atlas could not be built";
       } else {
@@ -788,7 +795,7 @@
 
     async function poll() {
       try {
-        const st = await call("GET", "/api/match/status");
+        const st = await call("GET", `/api/match/status?space=${atlasSpace}`);
         showAtlas(st);
         if (st.state === "building") {
           polling = setTimeout(poll, 500);
@@ -798,11 +805,16 @@
       polling = null;
     }
 
+    // The atlas of the drawing's space is prepared when the tab shows, and again on a new scene.
+    lw.on("scene", (sc) => { if (!root.hidden && sc && !prepared[sc.space]) shown(); });
     async function shown() {
-      if (prepared) return;
-      prepared = true;
+      const sc = lw.scene();
+      const space = sc && sc.space === "sphere" ? "sphere" : "plane";
+      if (prepared[space]) return;
+      prepared[space] = true;
+      atlasSpace = space;
       try {
-        showAtlas(await call("POST", "/api/match/prepare"));
+        showAtlas(await call("POST", `/api/match/prepare?space=${space}`));
         if (!polling) poll();
       } catch (e) {
         atlasInfo.textContent = e.message;
@@ -815,6 +827,7 @@
       matchBtn.disabled = true;
       candidates.replaceChildren();
       lwStatus("matching…", "busy");
+      atlasSpace = target[0].length === 3 ? "sphere" : "plane"; // the rows choose the atlas
       if (!polling) polling = setTimeout(poll, 300);
       try {
         const res = await call("POST", "/api/match", { points: target, top: Number(top.value),
@@ -862,9 +875,12 @@
       li.addEventListener("mouseenter", () => lw.overlay("synth-candidate", runs(c.curve),
         { color: "#2f6bd8", width: 1.5, label: `candidate #${c.rank}` }));
       li.addEventListener("mouseleave", () => lw.clearOverlay("synth-candidate"));
+      // Directions on the sphere are previewed as the drawing shows them (screen y is down).
+      const up = (q) => [q[0], -q[1]];
+      const flat = (rows) => rows.map((p) => (p && p.length === 3 ? up(lw.toScreen(p)) : p));
       requestAnimationFrame(() => preview(canvas, [
-        { points: target ? target.concat([target[0]]) : [], color: "#9aa5b1", width: 1, dash: [3, 2] },
-        { points: c.curve, color: "#2f6bd8", width: 1.6 }]));
+        { points: flat(target ? target.concat([target[0]]) : []), color: "#9aa5b1", width: 1, dash: [3, 2] },
+        { points: flat(c.curve), color: "#2f6bd8", width: 1.6 }]));
       return li;
     }
 
