@@ -409,15 +409,19 @@ def _joint_table(drawing: Drawing, step: Step, guides: dict[str, str]) -> dict[s
     else:
         origin, toward = step.parents
         table.update(type="rigid", origin=origin, toward=toward)
-        o, t, p = at[origin], at[toward], at[name]
-        if flat:
-            e = (t - o) / np.hypot(*(t - o))
-            rel = p - o
-            table.update(u=_num(rel @ e), v=_num(e[0] * rel[1] - e[1] * rel[0]))
-        else:
-            table.update(arc=_deg(float(sphere.arc(o, p))))
-            table.update(angle=_deg(float(sphere.angle_at(o, t, p))))
+        table.update(_in_frame(at[origin], at[toward], at[name], flat))
     return table
+
+
+def _in_frame(o: Array, t: Array, p: Array, flat: bool) -> dict[str, float]:
+    """Where p sits on the link o→t, as documents write it: (u, v) in the frame with origin o
+    and x towards t in the plane; arc from o and angle from the great circle o→t on the
+    sphere (degrees)."""
+    if flat:
+        e = (t - o) / np.hypot(*(t - o))
+        rel = p - o
+        return {"u": _num(rel @ e), "v": _num(e[0] * rel[1] - e[1] * rel[0])}
+    return {"arc": _deg(float(sphere.arc(o, p))), "angle": _deg(float(sphere.angle_at(o, t, p)))}
 
 
 def _triad_table(drawing: Drawing, step: Step) -> dict[str, Any]:
@@ -430,14 +434,7 @@ def _triad_table(drawing: Drawing, step: Step) -> dict[str, Any]:
         table[f"p{k}"] = anchor
         table[f"r{k}"] = _length(drawing, anchor, joint)
     table["side"] = _length(drawing, j1, j2)
-    o, t, p = at[j1], at[j2], at[j3]
-    if drawing.space == "plane":
-        e = (t - o) / np.hypot(*(t - o))
-        rel = p - o
-        table.update(u=_num(rel @ e), v=_num(e[0] * rel[1] - e[1] * rel[0]))
-    else:
-        table.update(arc=_deg(float(sphere.arc(o, p))))
-        table.update(angle=_deg(float(sphere.angle_at(o, t, p))))
+    table.update(_in_frame(at[j1], at[j2], at[j3], drawing.space == "plane"))
     table["pose"] = 0
     return table
 

@@ -52,11 +52,12 @@ from linkwright.dynamics import (
 from linkwright.dynamics.model import link_lengths
 from linkwright.engine import cost
 from linkwright.engine.circuits import NoPeriod
-from linkwright.engine.evaluate import Motion, evaluate
+from linkwright.engine.evaluate import Motion
 from linkwright.io import Document
 from linkwright.mechanisms import Mechanism, circuits, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.server import budget, limits
+from linkwright.server.overlays import with_rates
 from linkwright.server.scene_io import json_rows, read_document, to_json
 from linkwright.server.scene_modes import continuous_degrees
 from linkwright.server.schema import DocumentBody, examples
@@ -130,18 +131,6 @@ def estimate(mechanism: Mechanism, st: Structure, samples: int) -> tuple[Any, co
 # --------------------------------------------------------------------------------------------
 # The answer
 # --------------------------------------------------------------------------------------------
-
-
-def _with_rates(mechanism: Mechanism, motion: Motion) -> Motion:
-    """A traced circuit's own samples placed again with derivatives, on the branches it ran."""
-    return evaluate(
-        mechanism.plan,
-        mechanism.params(),
-        motion.input,
-        points=mechanism.points,
-        branches=motion.branches or None,
-        order=2,
-    )
 
 
 def _masked(values: np.ndarray, valid: np.ndarray) -> np.ndarray:
@@ -332,7 +321,7 @@ def _forces_json(document: Any, *, speed: float, samples: int, at: float | None)
     bodies = []
     for motion in _own_motions(mech, arcs, samples):
         cost.check_time()
-        f = forces_of(st, params, _with_rates(mech, motion), masses, loads)
+        f = forces_of(st, params, with_rates(mech, motion), masses, loads)
         bodies.append(_circuit_json(f, continuous_degrees(motion.input)))
     out["circuits"] = bodies
     if bodies:

@@ -38,7 +38,15 @@ from linkwright.engine.evaluate import Motion, evaluate
 from linkwright.io.report import analysis_report
 from linkwright.mechanisms import Mechanism, solve
 
-__all__ = ["ALL_PAIRS_BODIES", "DASH", "FEATURE_SAMPLES", "estimate", "motion_json", "summary_json"]
+__all__ = [
+    "ALL_PAIRS_BODIES",
+    "DASH",
+    "FEATURE_SAMPLES",
+    "estimate",
+    "motion_json",
+    "summary_json",
+    "with_rates",
+]
 
 ALL_PAIRS_BODIES = 6
 """Linkages of at most this many bodies (the frame included: every four-bar and six-bar) get
@@ -112,7 +120,7 @@ def estimate(
 # --------------------------------------------------------------------------------------------
 
 
-def _with_rates(mechanism: Mechanism, motion: Motion) -> Motion:
+def with_rates(mechanism: Mechanism, motion: Motion) -> Motion:
     """The circuit's own samples placed again with derivatives, on the branches it ran."""
     return evaluate(
         mechanism.plan,
@@ -180,7 +188,7 @@ def motion_json(
     accels: list[np.ndarray] = []
     for motion in motions:
         cost.check_time()
-        full = _with_rates(mechanism, motion)
+        full = with_rates(mechanism, motion)
         assert full.velocities is not None and full.accelerations is not None
         speeds += list(full.velocities.values())
         accels += list(full.accelerations.values())

@@ -15,7 +15,7 @@
 import { $, INK2, INK3, SAMPLES, clone, finite, fmt, fmtDeg, mulMV, okPoint, sizeCanvas, tickLabel, ticks } from "./util.js";
 import { api, currentPose, state, status } from "./pipeline.js";
 import { drawing, projectSphere, requestDraw, sphereGeom, toScreenPlane } from "./draw.js";
-import { addOverlayLayer } from "./overlays.js";
+import { addOverlayLayer, drawArrow } from "./overlays.js";
 
 const FC_KEY = "linkwright.workbench.forces";
 const FC_COLOUR = "#e8590c";
@@ -161,30 +161,7 @@ function fcSample() {
 
 // ------------------------------------------------------------------ arrows on the drawing
 function fcArrow(ctx, from, to) {
-  const dx = to[0] - from[0];
-  const dy = to[1] - from[1];
-  const len = Math.hypot(dx, dy);
-  if (!(len > 1)) return false;
-  const ux = dx / len;
-  const uy = dy / len;
-  const head = Math.min(9, 0.4 * len);
-  ctx.save();
-  ctx.strokeStyle = FC_COLOUR;
-  ctx.fillStyle = FC_COLOUR;
-  ctx.lineWidth = 2.2;
-  ctx.lineCap = "round";
-  ctx.beginPath();
-  ctx.moveTo(from[0], from[1]);
-  ctx.lineTo(to[0] - ux * head * 0.8, to[1] - uy * head * 0.8);
-  ctx.stroke();
-  ctx.beginPath();
-  ctx.moveTo(to[0], to[1]);
-  ctx.lineTo(to[0] - ux * head - uy * head * 0.45, to[1] - uy * head + ux * head * 0.45);
-  ctx.lineTo(to[0] - ux * head + uy * head * 0.45, to[1] - uy * head - ux * head * 0.45);
-  ctx.closePath();
-  ctx.fill();
-  ctx.restore();
-  return true;
+  return drawArrow(ctx, from, to, FC_COLOUR, 2.2);
 }
 
 const fcPixels = (size, typical) => (typical > 0 && finite(size) ? Math.min(FC_MOST_PX, (FC_ARROW_PX * size) / typical) : 0);

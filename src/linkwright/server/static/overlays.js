@@ -131,7 +131,8 @@ export function overlaySample() {
 }
 
 // ------------------------------------------------------------------ drawing
-function drawArrow(ctx, from, to, colour, width) {
+/** An arrow from screen point `from` to `to`; false where it is too short to draw. */
+export function drawArrow(ctx, from, to, colour, width) {
   const dx = to[0] - from[0];
   const dy = to[1] - from[1];
   const len = Math.hypot(dx, dy);
