@@ -7,14 +7,52 @@ import {
 import { ownModeIndex, state } from "./pipeline.js";
 import { diamond, requestDraw, strokePoly } from "./draw.js";
 import { breakJumps } from "./sphere.js";
+import { pageSpeed } from "./overlays.js";
 
 // ------------------------------------------------------------------ plots
 const seriesColour = (s, k) => (typeof s.color === "string" && /^#[0-9a-fA-F]{3,8}$|^[a-z]+$/.test(s.color) ? s.color : SERIES_COLOURS[k % SERIES_COLOURS.length]);
 const SERIES_COLOURS = ["#2f6bd8", "#d9480f", "#2b8a3e", "#ae3ec9", "#e67700", "#0c8599"];
 
 const KIND_NAMES = { angles: "Angles", velocity: "Velocity", acceleration: "Acceleration" };
+const RATE_ORDER = { velocity: 1, acceleration: 2 };
+// "ω_out/ω_in = φ′ (rad/rad)", "x′ = dx/dθ (length/rad)", "|d²P/dθ²| (length/rad²)": a
+// rate per radian of input, the ratio (before " = ") named without its "/ω_in"
+const PER_RADIAN = /^(.*?)(?: = .*)? \((rad|length)\/rad²?\)$/;
+const BY_INPUT = /\/ω_in²?$/;
+
+/** A velocity or acceleration panel at the page's input speed: each value times ω (ω²), the
+ * label in units per second. Panels of other kinds, or labels not per radian, stay as sent. */
+function physicalPanel(panel, order, sc) {
+  const m = PER_RADIAN.exec(panel.ylabel || "");
+  if (!m) return panel;
+  const name = BY_INPUT.test(m[1]) ? m[1].replace(BY_INPUT, "") : `${m[1]}·ω${order === 2 ? "²" : ""}`;
+  const speed = pageSpeed(sc);
+  const k = Math.pow(speed.omega, order);
+  const length = speed.length && speed.length !== "°" ? speed.length : "length";
+  const unit = `${m[2] === "rad" ? "rad" : length}/s${order === 2 ? "²" : ""}`;
+  return {
+    ...panel,
+    ylabel: `${name} at ${fmt(speed.rpm)} rpm (${unit})`,
+    ideal: finite(panel.ideal) ? panel.ideal * k : panel.ideal,
+    series: panel.series.map((s) => ({
+      ...s,
+      values: (s.values || []).map((arr) => (arr || []).map((v) => (finite(v) ? v * k : v))),
+    })),
+  };
+}
+
+let followsSpeed = false;
 
 export function renderCharts(sc) {
+  if (!followsSpeed) {
+    // a new input speed rescales the charts shown per second
+    followsSpeed = true;
+    state.listeners.units.push(() => {
+      if (!state.chartsPhysical || !state.scene) return;
+      renderCharts(state.scene);
+      drawChartsCursor();
+    });
+  }
   const box = $("plots");
   const diags = sc.diagrams || null;
   const entries = [];
@@ -26,10 +64,15 @@ export function renderCharts(sc) {
       const d = diags[key];
       if (!d || !Array.isArray(d.panels)) continue;
       kinds.push(key);
-      d.panels.forEach((panel, p) => entries.push({ key, p, x: d.x, panel }));
+      const order = state.chartsPhysical ? RATE_ORDER[key] : 0;
+      d.panels.forEach((panel, p) =>
+        entries.push({ key, p, x: d.x, panel: order ? physicalPanel(panel, order, sc) : panel }),
+      );
     }
   }
-  const sig = entries.map((e) => `${e.key}/${e.p}/${e.panel.ylabel}/${e.panel.series.map((s) => s.label).join(",")}`).join("|");
+  const sig =
+    `${state.chartsPhysical}|` +
+    entries.map((e) => `${e.key}/${e.p}/${e.panel.ylabel}/${e.panel.series.map((s) => s.label).join(",")}`).join("|");
   if (sig !== state.chartSig) {
     state.chartSig = sig;
     box.innerHTML = "";
@@ -51,6 +94,23 @@ export function renderCharts(sc) {
         b.textContent = KIND_NAMES[key] || key;
         b.addEventListener("click", () => showPlotKind(key));
         bar.appendChild(b);
+      }
+      if (kinds.some((k) => RATE_ORDER[k])) {
+        const unit = document.createElement("button");
+        unit.type = "button";
+        unit.className = "plot-units";
+        unit.dataset.testid = "plot-physical";
+        unit.setAttribute("aria-pressed", state.chartsPhysical ? "true" : "false");
+        unit.textContent = state.chartsPhysical ? "per second" : "per radian";
+        unit.title = state.chartsPhysical
+          ? "Velocities and accelerations at the input speed set beside the drawing; click for the ratios per radian of input"
+          : "Velocities and accelerations as ratios per radian of input; click for physical units at the input speed";
+        unit.addEventListener("click", () => {
+          state.chartsPhysical = !state.chartsPhysical;
+          if (state.scene) renderCharts(state.scene);
+          drawChartsCursor();
+        });
+        bar.appendChild(unit);
       }
       box.appendChild(bar);
     }

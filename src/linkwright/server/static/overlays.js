@@ -10,7 +10,7 @@
  * v = dP/dθ·ω and a = d²P/dθ²·ω² (constant input speed ω). */
 
 import { $, clone, finite, fmt, okPoint, sizeCanvas, unit3 } from "./util.js";
-import { currentPose, requestScene, state, status } from "./pipeline.js";
+import { currentPose, emit, requestScene, state, status } from "./pipeline.js";
 import { drawing, labelText, projectSphere, requestDraw, sphereGeom, toScreenPlane } from "./draw.js";
 
 const OV_KEY = "linkwright.workbench.overlays";
@@ -92,6 +92,11 @@ const inputOmega = () => (ovView.rpm * 2 * Math.PI) / 60; // rad/s of the input
 function ovLengthUnit(sc) {
   if (sc && sc.space === "sphere") return "°";
   return (sc && sc.units) || "";
+}
+
+/** The input speed the page is set to (rpm, and ω in rad/s) and the length unit of `sc`. */
+export function pageSpeed(sc) {
+  return { rpm: ovView.rpm, omega: inputOmega(), length: ovLengthUnit(sc) };
 }
 
 /** "mm/s" or "°/s" (the sphere: the arc a joint sweeps), or "/s" of the document's lengths. */
@@ -514,6 +519,7 @@ function buildOverlayPanel() {
     ovView.rpm = x;
     ovSave();
     ovReadoutSig = "";
+    emit("units", x);
     requestDraw();
   });
   $("length-unit").addEventListener("change", (e) => setLengthUnit(e.target.value));

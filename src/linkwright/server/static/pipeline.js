@@ -34,7 +34,8 @@ export const state = {
   hoverHandle: null,
   hoverLimit: null,
   limitMarks: [],
-  listeners: { scene: [], at: [], document: [] },
+  listeners: { scene: [], at: [], document: [], units: [] },
+  chartsPhysical: false, // the velocity and acceleration charts at the page's input speed
   sceneCount: 0,
   busy: 0,
   pipelineError: false,

@@ -1,0 +1,70 @@
+"""Issue 24 point 5: the velocity and acceleration charts in physical units at the page's input
+speed. The charts' values per radian of input (the kinematic coefficients the server sends)
+times ω, and ω², are checked against the same charts' own per-radian readout, at two speeds."""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from playwright.sync_api import expect
+
+SCENES = "Number(document.body.dataset.sceneCount || 0)"
+NUMBER = re.compile(r"[−-]?\d+(?:\.\d+)?(?:e[−-]?\d+)?")
+
+
+def _readouts(page: Any, kind: str) -> list[float]:
+    page.wait_for_function("document.body.dataset.busy === '0'")
+    texts = page.eval_on_selector_all(
+        f"[data-testid='plot'][data-diagram='{kind}'] canvas",
+        "cs => cs.map(c => c.dataset.readout || '')",
+    )
+    values = []
+    for text in texts:
+        for m in NUMBER.findall(text):
+            values.append(float(m.replace("−", "-")))
+    return values
+
+
+def test_rate_charts_per_second_at_the_input_speed(page: Any, server_url: str) -> None:
+    page.goto(server_url + "/#crank-rocker")
+    page.wait_for_function(f"{SCENES} >= 1")
+    page.wait_for_function("document.body.dataset.busy === '0'")
+    page.evaluate("lw.setAt(70)")
+    for kind, order in (("velocity", 1), ("acceleration", 2)):
+        page.click(f"[data-testid='plot-kind-{kind}']")
+        button = page.locator("[data-testid='plot-physical']")
+        expect(button).to_have_text("per radian")
+        per_radian = _readouts(page, kind)
+        assert per_radian and any(abs(v) > 1e-3 for v in per_radian)
+        titles = page.eval_on_selector_all(
+            f"[data-testid='plot'][data-diagram='{kind}'] .plot-title span",
+            "ss => ss.map(s => s.textContent)",
+        )
+        assert any("/rad" in t for t in titles)
+
+        button.click()
+        expect(button).to_have_text("per second")
+        omega = 2 * math.pi * 60 / 60
+        titles = page.eval_on_selector_all(
+            f"[data-testid='plot'][data-diagram='{kind}'] .plot-title span",
+            "ss => ss.map(s => s.textContent)",
+        )
+        assert any("at 60 rpm" in t and "/s" in t for t in titles), titles
+        for v, w in zip(per_radian, _readouts(page, kind), strict=True):
+            assert math.isclose(w, v * omega**order, rel_tol=2e-3, abs_tol=1e-9), (v, w)
+
+        # a new input speed rescales them: twice the speed, ω (ω²) times as much again
+        page.fill("[data-testid='input-rpm']", "120")
+        page.dispatch_event("[data-testid='input-rpm']", "change")
+        page.wait_for_function(
+            f"[...document.querySelectorAll(\"[data-diagram='{kind}'] .plot-title span\")]"
+            ".some(s => s.textContent.includes('at 120 rpm'))"
+        )
+        for v, w in zip(per_radian, _readouts(page, kind), strict=True):
+            assert math.isclose(w, v * (2 * omega) ** order, rel_tol=2e-3, abs_tol=1e-9)
+        page.fill("[data-testid='input-rpm']", "60")
+        page.dispatch_event("[data-testid='input-rpm']", "change")
+        button.click()
+        expect(button).to_have_text("per radian")
