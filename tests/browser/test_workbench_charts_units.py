@@ -68,3 +68,27 @@ def test_rate_charts_per_second_at_the_input_speed(page: Any, server_url: str) -
         page.dispatch_event("[data-testid='input-rpm']", "change")
         button.click()
         expect(button).to_have_text("per radian")
+
+
+def test_a_link_carries_the_toggles_the_speed_and_the_units(page: Any, server_url: str) -> None:
+    page.goto(server_url + "/#crank-rocker")
+    page.wait_for_function(f"{SCENES} >= 1")
+    page.wait_for_function("document.body.dataset.busy === '0'")
+    page.click("[data-testid='toggle-velocity']")
+    page.fill("[data-testid='input-rpm']", "90")
+    page.dispatch_event("[data-testid='input-rpm']", "change")
+    page.click("[data-testid='plot-kind-velocity']")
+    page.click("[data-testid='plot-physical']")
+    page.wait_for_function("document.body.dataset.busy === '0'")
+    link = page.evaluate("lw.shareLink()")
+    # another browser context: nothing of this page's storage reaches it
+    other = page.context.browser.new_context(viewport={"width": 1400, "height": 900})
+    fresh = other.new_page()
+    fresh.goto(link)
+    fresh.wait_for_function(f"{SCENES} >= 1")
+    fresh.wait_for_function("document.body.dataset.busy === '0'")
+    assert fresh.evaluate("lw.overlays.get().velocity") is True
+    assert fresh.evaluate("lw.overlays.units().rpm") == 90
+    expect(fresh.locator("[data-testid='input-rpm']")).to_have_value("90")
+    expect(fresh.locator("[data-testid='plot-physical']")).to_have_text("per second")
+    other.close()

@@ -452,6 +452,29 @@ function overlayToggle(key, text, title) {
 
 /** Turn overlays on or off ({velocity, acceleration, centres, summary}); a scene is asked for
  * again where the one shown lacks what was turned on. */
+/** The toggles and the input speed, as a link carries them (share.js). */
+export function overlayState() {
+  const { velocity, acceleration, centres, summary, rpm } = ovView;
+  return { velocity, acceleration, centres, summary, rpm };
+}
+
+/** Show the toggles and the speed a link carries; anything not of the right kind is ignored. */
+export function applyOverlayState(o) {
+  if (!o || typeof o !== "object") return Promise.resolve(state.scene);
+  if (finite(o.rpm) && o.rpm > 0 && o.rpm <= 1e6 && o.rpm !== ovView.rpm) {
+    ovView.rpm = o.rpm;
+    const box = $("input-rpm");
+    if (box) box.value = String(o.rpm);
+    ovReadoutSig = "";
+    emit("units", o.rpm);
+  }
+  const flags = {};
+  for (const k of ["velocity", "acceleration", "centres", "summary"]) {
+    if (typeof o[k] === "boolean") flags[k] = o[k];
+  }
+  return setOverlays(flags);
+}
+
 export function setOverlays(opts) {
   for (const k of ["velocity", "acceleration", "centres", "summary"]) if (k in opts) ovView[k] = !!opts[k];
   ovSave();

@@ -2,7 +2,8 @@
  *
  * A link carries the document (so the assembly mode, which is the document's), the view (the
  * plane's scale and the model point at the drawing's centre, or the sphere's rotation and
- * zoom), the input angle and the circuit shown: `#s=` then "z." and base64url of deflated
+ * zoom), the input angle and the circuit shown, the drawing being built, the analysis toggles
+ * on the drawing, the input speed and the charts' units: `#s=` then "z." and base64url of deflated
  * compact JSON where the browser has CompressionStream("deflate-raw"), else "j." and the JSON
  * itself. The fragment never reaches the server. A link that is damaged, foreign or too long
  * opens the default example with a one-line message, never a blank page.
@@ -17,6 +18,8 @@ import { loadExample, loadFamily, updateAtUI } from "./panels.js";
 import { drawAll, drawing, fromScreenPlane } from "./draw.js";
 import { keyOf, markLoaded, offerAction, readWork, sessionKey, setBaseline } from "./history.js";
 import { restoreSketch } from "./builder.js";
+import { applyOverlayState, overlayState } from "./overlays.js";
+import { renderCharts } from "./charts.js";
 
 const LINK_PREFIX = "#s=";
 const STATE_VERSION = 1;
@@ -31,6 +34,8 @@ const DEFAULT_EXAMPLE = "crank-rocker";
 export function captureSession() {
   const out = { v: STATE_VERSION, d: clone(state.doc) };
   if (state.sketch) out.k = clone(state.sketch);
+  out.o = overlayState();
+  if (state.chartsPhysical) out.p = true;
   if (state.exampleName) out.e = state.exampleName;
   if (finite(state.at)) out.a = state.at;
   if (state.cur) out.c = [state.cur.circuit, state.cur.index];
@@ -112,6 +117,12 @@ export async function restoreSession(snap) {
     return false;
   }
   applyView(snap.w, sketch ? { space: sketch.space === "sphere" ? "sphere" : "plane" } : sc);
+  // the analysis on the drawing and the charts' units, where the state carries them
+  await applyOverlayState(snap.o);
+  if (typeof snap.p === "boolean" && snap.p !== state.chartsPhysical) {
+    state.chartsPhysical = snap.p;
+    if (state.scene) renderCharts(state.scene);
+  }
   applyCircuit(snap.c, at, sc);
   drawAll();
   return true;
