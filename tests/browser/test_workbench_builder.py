@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import itertools
 import math
+import tomllib
+import uuid
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -382,3 +385,42 @@ def test_fields_follow_the_drawn_names(page: Any, server_url: str) -> None:
     _settle(page)
     expect(page.locator("#fields")).to_contain_text("C u")
     expect(page.locator("#fields")).not_to_contain_text("P u")
+
+
+def test_a_drawn_linkage_saves_exports_and_reopens_as_a_drawing(
+    page: Any, server_url: str, tmp_path: Any
+) -> None:
+    _open(page, server_url)
+    _build_fourbar(page)
+    doc = page.evaluate("lw.document()")
+    sketch = page.evaluate("lw.sketch()")
+    page.click("#side .tabs button[data-tab=library]")
+    name = f"drawn {uuid.uuid4().hex[:6]}"
+    page.fill("#lib-name", name)
+    page.click("#lib-save")
+    page.wait_for_selector(f"text=saved “{name}” in the library")
+    row = page.locator(f"#lib-list [data-testid=lib-entry][data-name='{name}']")
+    expect(row).to_have_count(1)
+    with page.expect_download() as download:
+        row.locator("[data-testid=lib-export-toml]").click()
+    saved = tomllib.loads(Path(download.value.path()).read_text(encoding="utf-8"))
+    assert saved["mechanism"]["family"] == "linkage"
+    assert [j["name"] for j in saved["mechanism"]["joints"]] == [
+        j["name"] for j in doc["mechanism"]["joints"]
+    ]
+
+    # leave the builder, open another example, then the saved one, and draw it again
+    page.click("[data-testid='build']")
+    _settle(page)
+    page.select_option("#example-select", "slider-crank")
+    _settle(page)
+    row.locator("[data-testid=lib-load]").click()
+    page.wait_for_function("lw.document().mechanism.family === 'linkage'")
+    _settle(page)
+    page.click("[data-testid='build']")
+    page.wait_for_function("lw.sketchReport() && lw.sketchReport().status === 'ok'")
+    again = page.evaluate("lw.sketch()")
+    assert {j["name"] for j in again["joints"]} == {j["name"] for j in sketch["joints"]}
+    for j in sketch["joints"]:
+        assert math.dist(_at(again, j["name"]), j["at"]) < 1e-9
+    assert sorted(sorted(x) for x in again["links"]) == sorted(sorted(x) for x in sketch["links"])
