@@ -236,3 +236,18 @@ def test_every_example_round_trips_through_the_library(client: TestClient, examp
         imported = client.post("/api/library/import", files=files).json()
         assert parse_document(imported["document"]) == original
         assert imported["name"].startswith(original.title or example)
+
+
+def test_a_name_longer_than_the_schema_says_is_refused_as_sent(client: TestClient) -> None:
+    # The schema's maxLength holds for the name as sent: one space and 200 stars is 201
+    # characters, though 200 once stripped (the contract fuzzer found it accepted).
+    entry = client.post("/api/library", json={"name": "x", "document": CRANK_ROCKER}).json()
+    padded = " " + "*" * 200
+    r = client.patch(f"/api/library/{entry['id']}", json={"name": padded})
+    assert r.status_code == 422
+    assert r.json()["error"] == "name: 201 characters, at most 200 allowed"
+    r = client.post("/api/library", json={"name": padded, "document": CRANK_ROCKER})
+    assert r.status_code == 422 and "at most 200" in r.json()["error"]
+    # a name of exactly 200 characters with no padding is still fine
+    r = client.patch(f"/api/library/{entry['id']}", json={"name": "*" * 200})
+    assert r.status_code == 200 and r.json()["name"] == "*" * 200

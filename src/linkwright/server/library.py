@@ -482,8 +482,9 @@ router = APIRouter()
 
 
 # The name's rule (NFC, stripped, no controls, at most MAX_NAME characters) is check_name's; the
-# schema says the length, which the stripped name must keep.
-_NAME = Field(json_schema_extra={"minLength": 1, "maxLength": MAX_NAME})
+# schema's length holds for the name as sent too, spaces around it included (a name padded past
+# it was once accepted against the schema).
+_NAME = Field(max_length=MAX_NAME, json_schema_extra={"minLength": 1})
 
 
 _DOC = document_examples()[0]
