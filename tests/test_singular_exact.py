@@ -86,7 +86,9 @@ RHOMBUS = FourBar(A0=[0, 0], B0=[1, 0], crank=1, coupler=1, rocker=1, u=0.5, v=0
 
 
 def batch_of_one(m):
-    return type(m)(**{f.name: np.asarray(getattr(m, f.name))[None] for f in fields(m)})
+    # start says where it runs, one value for a batch: not a per-linkage array.
+    numbers = (f.name for f in fields(m) if f.name != "start")
+    return type(m)(**{name: np.asarray(getattr(m, name))[None] for name in numbers})
 
 
 @pytest.mark.parametrize("start", [0.1, 0.0])

@@ -75,6 +75,8 @@ def take(m, i):
     """The ``i``-th mechanism of a batch, as a batch of one."""
     out = {}
     for f in fields(m):
+        if f.name == "start":  # where it runs, one value for a batch
+            continue
         tail = (2,) if f.name in m.points else ()
         value = np.broadcast_to(np.asarray(getattr(m, f.name), float), m.batch_shape + tail)
         out[f.name] = value[i : i + 1]

@@ -544,6 +544,13 @@ def synth_path(
             help="Crank angles (deg, from the frame line) at each point.",
         ),
     ] = None,
+    free_start: Annotated[
+        bool,
+        typer.Option(
+            "--free-start",
+            help="With --angles: they give the input's steps; where it starts is fitted too.",
+        ),
+    ] = False,
     free_timing: Annotated[
         bool, typer.Option("--free-timing", help="Unknown but monotonic input angles.")
     ] = False,
@@ -614,6 +621,8 @@ def synth_path(
 
     if sum((angles is not None, free_timing, no_timing)) > 1:
         raise CliError("give at most one of --angles, --free-timing and --no-timing")
+    if free_start and angles is None:
+        raise CliError("--free-start frees where the --angles start: give --angles too")
     family, like = family_and_template(family, template, "its numbers are free")
     try:
         model = model_for(family, like)
@@ -639,7 +648,7 @@ def synth_path(
             fit = fit_path(
                 family, pts, angles=given, timing=timing, closed=closed, bounds=bounds or None,
                 constraints=constraints, seed=seed, budget=budget, progress=progress,
-                template=like, max_evaluations=evaluations,
+                template=like, max_evaluations=evaluations, free_start=free_start,
             )  # fmt: skip
     except PathSynthesisError as exc:
         raise CliError(str(exc)) from None

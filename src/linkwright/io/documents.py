@@ -21,6 +21,12 @@ families are ``spherical-fourbar`` (paper 000's frame, crank, coupler, rocker an
 sigma, input "AB" or "FG"). A spherical linkage's fixed joint is an axis ``at = [x, y, z]``,
 any non-zero vector along it (the document keeps it as written; the joint is its direction).
 
+Every family also takes an optional ``start`` (degrees): where the machine runs. A full turn of
+the input starts there; an input that rocks over several arcs (a double rocker's two) runs on
+the arc that holds it, so a document says which circuit it means (a synthesised linkage names
+the one its answer lies on). Without it, a full turn starts at 0 and a rocking input runs on
+its first arc (:func:`linkwright.mechanisms.running_circuit`).
+
 Example document (TOML)::
 
     format = "linkwright/1"
@@ -356,8 +362,10 @@ def _validate_mechanism(value: Any) -> dict[str, Any]:
     if family not in FAMILY_SPECS:
         raise DocumentError("mechanism.family", unknown_choice("family", family, known))
     spec = FAMILY_SPECS[family]
-    check_keys(mech, ("family", *spec.names, "mass"), "mechanism")
+    check_keys(mech, ("family", *spec.names, "start", "mass"), "mechanism")
     out = parse_fields(mech, spec.fields, "mechanism", {"family": family})
+    if "start" in mech:  # every family's: where the machine runs (Mechanism.start)
+        out["start"] = KINDS["angle_deg"].parse(mech["start"], "mechanism.start")
     if "mass" in mech:  # checked against the built mechanism, by _check_forces
         out["mass"] = mech["mass"]
     lengths, size = planar_dimensions(out, spec)
@@ -390,6 +398,8 @@ def _build(mech: Mapping[str, Any]) -> Mechanism:
         kind = KINDS[f.kind]
         args = (mech[f.name], f.targets, mech) if kind.context else (mech[f.name], f.targets)
         kwargs.update(kind.to_kwargs(*args))
+    if "start" in mech:
+        kwargs.update(KINDS["angle_deg"].to_kwargs(mech["start"], ("start",)))
     cls = _mechanism_class(family)
     try:
         return cls(**kwargs)
@@ -447,6 +457,8 @@ def mechanism_to_dict(mech: Mechanism, title: str | None = None) -> dict[str, An
             # A list field's kind names the item at fault ("joints[2].r1"); keep that path.
             inner = exc.field if exc.field.startswith(f"{f.name}[") else f.name
             raise DocumentError(f"mechanism.{inner}", exc.problem) from None
+    if mech.start is not None:
+        body["start"] = KINDS["angle_deg"].from_mech(mech, ("start",))
     out: dict[str, Any] = {"format": FORMAT}
     if title is not None:
         out["title"] = title

@@ -38,7 +38,7 @@ from linkwright.engine import (
 from linkwright.engine.plan import Plan, placed_joints
 from linkwright.files import atomic_path
 from linkwright.geometry.sphere import lambert_azimuthal, map_frame
-from linkwright.mechanisms import Mechanism, circuit, circuits, solve
+from linkwright.mechanisms import Mechanism, circuit, circuits, running_circuit, solve
 
 __all__ = [
     "FORMATS",
@@ -333,7 +333,7 @@ def circuit_paths(mechanism: Mechanism, samples: object) -> CircuitPaths:
         if mechanism.plan.triads:
             # A triad's circuits are found together, none where it never assembles.
             found = circuits(mechanism, n, order=0)[1]
-            motion = found[0] if found else None
+            motion = found[running_circuit(mechanism, n)] if found else None
         else:
             motion = circuit(mechanism, n, order=0)
     except ValueError as exc:  # e.g. a gear ratio that never repeats: no closed circuit

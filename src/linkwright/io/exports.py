@@ -167,11 +167,13 @@ def forces_columns(
 ) -> dict[str, Array]:
     """The forces at the circuit's samples, as named CSV columns (see the module notes)."""
     from linkwright.dynamics import forces_of
-    from linkwright.mechanisms import circuit, circuits
+    from linkwright.mechanisms import circuit, circuits, running_circuit
 
     st, masses, loads = forces
     if mechanism.plan.triads:
-        motion = circuits(mechanism, paths.samples, order=2)[1][0]
+        motion = circuits(mechanism, paths.samples, order=2)[1][
+            running_circuit(mechanism, paths.samples)
+        ]
     else:
         motion = circuit(mechanism, paths.samples, order=2)
     f = forces_of(st, mechanism.params(), motion, masses, loads)

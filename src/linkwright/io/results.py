@@ -250,15 +250,15 @@ def curve_document(
     import numpy as np
 
     from linkwright.io.document_kinds import tidy_number
-    from linkwright.mechanisms import circuit, circuits, input_range
+    from linkwright.mechanisms import circuit, circuits, input_range, running_circuit
 
     mech = doc.mechanism
     if every:
         return _every_curve(doc, points, spacing)
     if mech.plan.triads:
-        # Its circuits are found together (none where it never assembles): the first.
+        # Its circuits are found together (none where it never assembles): the one it runs on.
         arcs, motions = circuits(mech, points, order=0, spacing=spacing)
-        motion = motions[0] if motions else None
+        motion = motions[running_circuit(mech, points, spacing)] if motions else None
     else:
         arcs, motion = None, circuit(mech, points, order=0, spacing=spacing)
     if motion is None or not bool(np.any(motion.valid)):

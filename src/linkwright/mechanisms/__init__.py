@@ -9,6 +9,7 @@ from linkwright.mechanisms.base import (
     circuits,
     configurations,
     input_range,
+    running_circuit,
     solve,
 )
 from linkwright.mechanisms.linkage import (
@@ -69,6 +70,7 @@ __all__ = [
     "configurations",
     "input_range",
     "registry",
+    "running_circuit",
     "solve",
     "solve_all",
 ]

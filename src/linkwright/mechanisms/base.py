@@ -8,7 +8,7 @@ assembly choice.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, is_dataclass, replace
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from typing import Any, ClassVar, Self, TypeVar, dataclass_transform, overload
 
 import numpy as np
@@ -24,6 +24,7 @@ __all__ = [
     "circuits",
     "configurations",
     "input_range",
+    "running_circuit",
     "solve",
 ]
 
@@ -115,11 +116,17 @@ class Mechanism:
     """Point (or unit-vector) parameters that :meth:`params` adds beyond the fields."""
     reported_joints: ClassVar[tuple[str, ...]] = ()
     traced_joint: ClassVar[str] = "P"
+    start: float | None = field(default=None, kw_only=True)
+    """Where the machine runs (radians), None for the default: a full turn of the input starts
+    here; an input that rocks runs the circuit over the arc that holds it (see :func:`circuit`).
+    A choice of how the linkage runs, like its assembly, not a dimension: not a plan parameter,
+    and one value for a whole batch."""
 
     def __post_init__(self) -> None:
+        self._check_start()
         for f in fields(self):
-            if f.type == "str":  # a word field (a six-bar's input) is the family's to check
-                continue
+            if f.type == "str" or f.name == "start":  # a word field (a six-bar's input) is the
+                continue  # family's to check; the start is checked above
             # A copy, made read-only: the caller's array stays theirs, and the value cannot
             # change under a motion or a cache computed from it.
             value = np.array(getattr(self, f.name), dtype=float)
@@ -149,6 +156,14 @@ class Mechanism:
         except ValueError as exc:
             raise InvalidMechanism(f"dimension arrays do not broadcast together: {exc}") from None
 
+    def _check_start(self) -> None:
+        if self.start is None:
+            return
+        value = np.asarray(self.start, dtype=float)
+        if value.ndim or not np.isfinite(value):
+            raise InvalidMechanism(f"start: must be one finite angle, got {self.start!r}")
+        object.__setattr__(self, "start", float(value))
+
     def _check_pose(self, value: Array) -> None:
         """A triad's pose index: a whole number below its pose count."""
         triads = self.plan.triads
@@ -162,11 +177,12 @@ class Mechanism:
 
     def params(self) -> dict[str, Array]:
         """The named parameters of the plan (lengths, radians, points, assembly sign): every
-        numeric field; a word (a Stephenson III's ``input``) chooses the plan, not a number."""
+        numeric field; a word (a Stephenson III's ``input``) chooses the plan, not a number, and
+        :attr:`start` where it runs."""
         return {
             f.name: value
             for f in fields(self)
-            if not isinstance(value := getattr(self, f.name), str)
+            if f.name != "start" and not isinstance(value := getattr(self, f.name), str)
         }
 
     @property
@@ -199,9 +215,10 @@ class Mechanism:
 
     def with_assembly(self, assembly: ArrayLike) -> Mechanism:
 
-        # The base class declares no fields; every family that has an ``assembly`` gets it
-        # replaced (dataclasses.replace checks the name at run time).
-        return replace(self, **{"assembly": assembly})
+        # The base class declares no ``assembly``; every family that has one gets it replaced
+        # (dataclasses.replace checks the name at run time).
+        change: dict[str, Any] = {"assembly": assembly}
+        return replace(self, **change)
 
     # -- a value: equality, hashing and batch indexing -------------------------------------------
 
@@ -375,7 +392,7 @@ def circuit(
     samples: int = 360,
     *,
     order: int = 2,
-    circuit: int = 0,
+    circuit: int | None = None,
     spacing: str = "input",
 ) -> Motion:
     """The whole closed circuit, as the machine runs, sampled at ``samples`` inputs.
@@ -401,8 +418,9 @@ def circuit(
         Samples along the circuit.
     order : int
         Derivatives by θ to compute (0, 1 or 2).
-    circuit : int
-        Which circuit, where the input rocks over several arcs (0 first).
+    circuit : int, optional
+        Which circuit (0 first, in the order of :func:`circuits`); by default the one the
+        mechanism runs on (:func:`running_circuit`: through its :attr:`~Mechanism.start`).
     spacing : {"input", "path"}
         How samples are spaced (see above).
 
@@ -429,16 +447,115 @@ def circuit(
 
     >>> bool(circuit(FourBar(A0=[0, 0], B0=[10, 0], crank=1, coupler=2, rocker=3), 8).valid.any())
     False
+
+    A double rocker runs on one of two arcs; its ``start`` says which (here the second):
+
+    >>> rocking = FourBar(A0=[0, 0], B0=[4, 0], crank=3, coupler=1, rocker=3.5, start=1.0)
+    >>> np.degrees(circuit(rocking, 4).input).round(3)
+    array([38.625, 58.605, 78.585, 58.605])
     """
+    chosen = running_circuit(mechanism, samples, spacing) if circuit is None else circuit
+    start = mechanism.start if mechanism.start is not None and circuit is None else 0.0
     return trace(
         mechanism.plan,
         mechanism.params(),
         samples,
         points=mechanism.points,
         order=order,
-        circuit=circuit,
+        circuit=chosen,
+        start=start,
         spacing=spacing,
     )
+
+
+def running_circuit(mechanism: Mechanism, samples: int = 360, spacing: str = "input") -> int:
+    """Which of :func:`circuits` the mechanism runs on: the one through its ``start``.
+
+    Without a ``start``, the first. An input that turns fully has one circuit. An input that
+    rocks runs over the arc that holds ``start`` (modulo the period), or the arc nearest to it
+    where none does (an edited linkage whose arcs moved). A linkage with a triad follows its
+    configurations, and several circuits may pass ``start``: the one through the mechanism's
+    own configuration there (its pose and assembly), found by position. A batch must run on
+    one circuit number throughout.
+
+    Parameters
+    ----------
+    mechanism : Mechanism
+        One linkage, or a batch (families without a triad).
+    samples, spacing : for a linkage with a triad, the sampling its circuits are found on
+        (that of :func:`circuits`).
+
+    Returns
+    -------
+    int
+        The circuit's number, 0 first.
+
+    Raises
+    ------
+    ValueError
+        For a batch whose members run on different circuit numbers.
+
+    Examples
+    --------
+    >>> from linkwright.mechanisms import FourBar
+    >>> double_rocker = FourBar(A0=[0, 0], B0=[4, 0], crank=3, coupler=1, rocker=3.5)
+    >>> arcs = input_range(double_rocker)
+    >>> np.degrees(arcs.lo).round(2), np.degrees(arcs.hi).round(2)
+    (array([-78.58,  38.62]), array([-38.62,  78.58]))
+    >>> [running_circuit(replace(double_rocker, start=np.radians(a))) for a in (60, -60, 180)]
+    [1, 0, 0]
+    """
+    start = mechanism.start
+    if start is None:
+        return 0
+    if mechanism.plan.triads:
+        return _triad_circuit(mechanism, start, samples, spacing)
+    arcs = input_range(mechanism)
+    lo, hi = np.asarray(arcs.lo, float), np.asarray(arcs.hi, float)
+    period = np.asarray(arcs.period, float)[..., None]
+    # How far start lies beyond each arc, both ways round the period (0 inside it).
+    above = lo + np.mod(start - lo, period)
+    gap = np.where(above <= hi, 0.0, np.minimum(above - hi, lo + period - above))
+    gap = np.where(np.isfinite(gap), gap, np.inf)
+    rocking = ~(np.asarray(arcs.full) | np.asarray(arcs.never))
+    chosen = np.argmin(gap, axis=-1)[rocking]
+    if chosen.size == 0:
+        return 0
+    if np.any(chosen != chosen.flat[0]):
+        raise ValueError(
+            "start: the linkages of this batch run on different circuits through it; "
+            "trace them one at a time (mechanism[i])"
+        )
+    return int(chosen.flat[0])
+
+
+def _triad_circuit(mechanism: Mechanism, start: float, samples: int, spacing: str) -> int:
+    """The circuit nearest to the mechanism's own configuration at ``start``."""
+    found = every_circuit(
+        mechanism.plan,
+        mechanism.params(),
+        samples,
+        points=mechanism.points,
+        order=0,
+        spacing=spacing,
+    )
+    if len(found) < 2:
+        return 0
+    own = solve(mechanism, [start], order=0)
+    size = float(np.max(mechanism.scale))
+    scores = []
+    for candidate in found:
+        motion = candidate.motion
+        # Input distance in the linkage's lengths, so that a circuit through start on another
+        # configuration loses to the one whose joints are where the mechanism's are.
+        off = np.abs(np.angle(np.exp(1j * (motion.input - start)))) * size
+        if bool(own.valid[0]):
+            for name, at in own.positions.items():
+                if name in motion.positions:
+                    apart = np.linalg.norm(motion.positions[name] - at[0], axis=-1)
+                    off = off + np.where(np.isfinite(apart), apart, np.inf)
+        scores.append(float(np.min(np.where(motion.valid, off, np.inf))))
+    return int(np.argmin(scores))
 
 
 def circuits(

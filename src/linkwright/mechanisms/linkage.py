@@ -253,6 +253,7 @@ about the guide's pole; write that DyadJoint instead
     def __post_init__(self) -> None:
         # The base class checks fields named in class-level tables; a composed linkage's fields
         # are per joint, so it validates them itself (and never calls the base check).
+        self._check_start()
         space = self.space
         if not isinstance(space, str) or space not in SPACES:
             raise InvalidLinkage(

@@ -123,6 +123,8 @@ def _family_vector(cls: type[Mechanism], words: tuple[tuple[str, str], ...]) -> 
     derived: list[str] = []
     for f in fields(cls):
         name = f.name
+        if name == "start":  # where it runs, not a dimension (Mechanism.start)
+            continue
         if _discrete_field(name, f.type):
             discrete.append(name)
             continue
@@ -182,7 +184,8 @@ def _family_vector(cls: type[Mechanism], words: tuple[tuple[str, str], ...]) -> 
 def _moved(probe: Mechanism, name: str, before: Mapping[str, Array]) -> set[str]:
     """The plan parameters that change when the field ``name`` moves a little."""
     value = np.asarray(getattr(probe, name), dtype=float)
-    after = replace(probe, **{name: value * (1 + _PROBE_STEP) + _PROBE_STEP}).params()
+    moved: dict[str, Any] = {name: value * (1 + _PROBE_STEP) + _PROBE_STEP}
+    after = replace(probe, **moved).params()
     return {
         k
         for k, v in before.items()
@@ -394,6 +397,8 @@ def _probe_instance(cls: type[Mechanism], words: Mapping[str, str]) -> Mechanism
     values: dict[str, Any] = {}
     points = lengths = arcs = others = 0
     for f in fields(cls):
+        if f.name == "start":
+            continue
         if f.type == "str":
             values[f.name] = words.get(f.name, f.default)
         elif f.name == "pose":

@@ -94,6 +94,7 @@ def encode(mech: Mechanism) -> dict[str, Any]:
     if is_linkage(mech):
         out["space"] = mech.space
         out["traced"] = list(mech.traced or ())
+        out["start"] = mech.start
         out["joints"] = [
             {"spec": type(j).__name__, **{f.name: _plain(getattr(j, f.name)) for f in fields(j)}}
             for j in mech.joints
@@ -121,4 +122,9 @@ def decode(data: Mapping[str, Any]) -> Mechanism:
     for entry in body["joints"]:
         fields_ = {k: v for k, v in entry.items() if k != "spec"}
         joints.append(specs[entry["spec"]](**fields_))
-    return Linkage(joints=tuple(joints), traced=tuple(body["traced"]), space=body["space"])
+    return Linkage(
+        joints=tuple(joints),
+        traced=tuple(body["traced"]),
+        space=body["space"],
+        start=body.get("start"),
+    )

@@ -25,7 +25,7 @@ import numpy as np
 
 from linkwright.engine.circuits import NoPeriod
 from linkwright.io import document_to_dict, topology
-from linkwright.mechanisms import Mechanism, circuits, solve
+from linkwright.mechanisms import Mechanism, circuits, running_circuit, solve
 from linkwright.mechanisms.sixbar import NoConstructionPlan
 from linkwright.plot.diagrams import DiagramError, diagram_series
 from linkwright.plot.view import range_text
@@ -292,7 +292,9 @@ def _scene(
     pose = None
     pose_at = at
     if own_mode is not None:
-        first = own_mode["circuits"][0]
+        # The circuit the document runs on (its start), where the page begins.
+        runs_on = min(running_circuit(mech, samples), len(own_mode["circuits"]) - 1)
+        first = own_mode["circuits"][runs_on]
         if pose_at is None:
             pose_at = first["input"][0]
         motion = solve(mech, np.radians([pose_at]), order=0)

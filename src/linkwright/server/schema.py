@@ -139,7 +139,12 @@ def _schema() -> dict[str, Any]:
         families.append(
             {
                 "type": "object",
-                "properties": {"family": {"const": family}, **properties},
+                # start: every family's, where the machine runs (degrees).
+                "properties": {
+                    "family": {"const": family},
+                    **properties,
+                    "start": copy.deepcopy(kinds["angle_deg"]),
+                },
                 "required": ["family", *required],
                 "additionalProperties": False,
             }

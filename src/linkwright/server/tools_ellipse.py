@@ -145,8 +145,10 @@ def _check_circle(circle: str) -> str:
 
 
 def _member(family: DoubleSlider, i: int | tuple[()]) -> DoubleSlider:
-    return DoubleSlider(**{k: np.asarray(getattr(family, k))[i] for k in
-                           ("M", "alpha", "beta", "p", "q", "h")})  # fmt: skip
+    member: dict[str, Any] = {
+        k: np.asarray(getattr(family, k))[i] for k in ("M", "alpha", "beta", "p", "q", "h")
+    }
+    return DoubleSlider(**member)
 
 
 def _trammel_entry(m: DoubleSlider, t: Trammel, s1: float, s2: float) -> dict[str, Any] | None:

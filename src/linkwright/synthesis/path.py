@@ -111,7 +111,7 @@ from linkwright.synthesis.path_spec import STARTS as STARTS
 from linkwright.synthesis.path_spec import STEP as STEP
 from linkwright.synthesis.path_spec import WEIGHT as WEIGHT
 from linkwright.synthesis.path_verify import in_one_arc as _in_one_arc
-from linkwright.synthesis.path_verify import verify_generic
+from linkwright.synthesis.path_verify import started, verify_generic
 
 # A name imported `as` itself moved to a sibling module and is re-exported for older imports;
 # a constant among them is read where it lives (set it there, not here).
@@ -313,6 +313,7 @@ def _verify(p: Problem, cand: Candidate) -> tuple[dict[str, Any] | None, str]:
                 f"{np.degrees(hi_g):.3f}°], outside [{np.degrees(p.mu):.3f}°, "
                 f"{180 - np.degrees(p.mu):.3f}°]"
             )
+    mech, named = started(mech, named, inputs)
     error = float(np.sum(dist**2))
     return dict(
         mechanism=mech,
@@ -365,7 +366,7 @@ def _seed_genes(p: Problem, seeds: list[tuple[Array, dict[str, float], float]]) 
     k = len(getattr(p.model, "combos", (0,)))
     for pose, shape, code in seeds:
         full = dict(zip(p.model.pose_names, np.asarray(pose, float), strict=True), **shape)
-        values = np.array([full[n] for n in p.names])
+        values = np.array([full.get(n, 0.0) for n in p.names])  # a free start: 0
         rows.append(np.r_[values[p.free], (2.0 * code + 1.0) / k - 1.0])
     return np.array(rows)
 
@@ -391,6 +392,7 @@ def fit_path(
     population: int | None = None,
     progress: Callable[[float], None] | None = None,
     template: Mechanism | None = None,
+    free_start: bool = False,
 ) -> PathFit:
     """Fit a linkage's traced point to target points (see the module docstring for the method).
 
@@ -401,6 +403,9 @@ def fit_path(
         1 % of unit length; they are normalised). N ≥ 3.
     angles : (N,) crank angles (radians) from the frame line at which each target must be
         reached; only with prescribed timing.
+    free_start : with prescribed timing, the angles prescribe the input's steps only: the
+        inputs are ``angles`` + s, the offset s fitted with the dimensions (Kunjur and
+        Krishnamurty's 18-point problem leaves its start angle free so).
     timing : ``"prescribed"``, ``"free"`` or ``"none"``; default prescribed when ``angles``
         are given, else free.
     closed : the targets lie on a closed curve: the input must turn fully (and the no-timing
@@ -497,6 +502,10 @@ assembling at every target was found ...
             raise PathSynthesisError("angles: must be finite")
     elif angles is not None:
         raise PathSynthesisError(f"angles: given, but the timing is {timing!r} (not prescribed)")
+    if free_start and timing != "prescribed":
+        raise PathSynthesisError(
+            f"free_start: frees where prescribed angles start; the timing is {timing!r}"
+        )
     if not (isinstance(budget, int | float) and budget > 0 and math.isfinite(budget)):
         raise PathSynthesisError(f"budget: must be a positive number of seconds, got {budget!r}")
     if max_evaluations is not None and max_evaluations < 1:
@@ -505,7 +514,7 @@ assembling at every target was found ...
     centre = 0.5 * (T.min(axis=0) + T.max(axis=0))
     bnds = _bounds(model, bounds, size, centre)
     cons = _constraints(model, constraints)
-    problem = Problem(model, T, ang, timing, closed, bnds, cons, size)
+    problem = Problem(model, T, ang, timing, closed, bnds, cons, size, free_start)
     goal = n * (1e-8 * size) ** 2 if target is None else float(target)
     if not (goal >= 0 and math.isfinite(goal)):
         raise PathSynthesisError(f"target: must be a non-negative error, got {target!r}")
@@ -597,7 +606,8 @@ assembling at every target was found ...
             a = asm[i : i + 1]
             if problem.timing == "prescribed":
                 assert problem.angles is not None  # a prescribed timing comes with its angles
-                rel, sense = problem.angles.copy(), 1.0
+                rel = problem.angles + problem.offsets(full[i : i + 1])[0]
+                sense = 1.0
             else:
                 rel, sense = problem.assign(pose, shape, a)
             e0 = float(errs[order[i]])

@@ -52,6 +52,9 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
+START = "input_start"
+"""The unknown a prescribed timing with a free start adds: the input of its first angle."""
+
 
 # ------------------------------------------------------------------------------------------
 # The problem: everything the search evaluates
@@ -83,6 +86,7 @@ class Problem:
         bounds: dict[str, tuple[float, float]],
         cons: PathConstraints,
         size: float,
+        free_start: bool = False,
     ) -> None:
         self.model = model
         self.targets = targets
@@ -95,14 +99,18 @@ class Problem:
         self.full_turn = cons.full_turn or closed
         self.mu = cons.min_transmission
         self.evaluations = 0
-        names = model.pose_names + model.shape_names
+        # A prescribed timing with a free start fits one more unknown, last: the input at which
+        # the given angles start (they then prescribe its steps only).
+        self.free_start = free_start
+        names = model.pose_names + model.shape_names + ((START,) if free_start else ())
         self.names = names
+        bounds = {**bounds, START: (0.0, TWO_PI)}
         self.lo = np.array([bounds[k][0] for k in names])
         self.hi = np.array([bounds[k][1] for k in names])
         self.free = self.lo < self.hi
         self.periodic = np.array(
             [
-                (k in ("frame_angle", "lon", "spin") or k in model.periodic)
+                (k in ("frame_angle", "lon", "spin", START) or k in model.periodic)
                 and self.hi[i] - self.lo[i] >= TWO_PI - 1e-9
                 for i, k in enumerate(names)
             ]
@@ -150,6 +158,10 @@ class Problem:
         if isinstance(self.model, GenericModel):
             return full, self.model.code(genes[:, -1])
         return full, np.where(genes[:, -1] >= 0, 1.0, -1.0)
+
+    def offsets(self, full: Array) -> Array:
+        """Each member's start (B,): where its prescribed angles begin (0 unless it is free)."""
+        return full[:, -1] if self.free_start else np.zeros(len(full))
 
     def split(self, full: Array) -> tuple[Array, dict[str, Array]]:
         """Parameters (B, names) → poses (B, 3) or (B, 3, 3) and shape arrays."""
@@ -216,10 +228,12 @@ class Problem:
         sl: slice
         hull: tuple[ArrayLike, ArrayLike] | None
         if self.timing == "prescribed":
-            angles = self.angles
-            assert angles is not None  # a prescribed timing comes with its angles
-            mids = _between(angles, BETWEEN)
-            rel = np.concatenate([angles, mids] + ([self.grid] if self.sampled else []))
+            assert self.angles is not None  # a prescribed timing comes with its angles
+            off = self.offsets(full)[:, None]
+            angles = self.angles[None] + off
+            mids = _between(self.angles, BETWEEN)[None] + off
+            grid = [np.broadcast_to(self.grid, (len(full), GRID))] if self.sampled else []
+            rel = np.concatenate([angles, mids, *grid], axis=1)
             P, valid, motion = self.trace(pose, shape, assembly, rel)
             n, nm = self.n, len(mids)
             d2 = np.sum((P[:, :n] - T) ** 2, axis=-1)
@@ -227,7 +241,7 @@ class Problem:
             err = np.sum(np.where(valid[:, :n], d2, 0.0), axis=1)
             viol += bad.sum(axis=1)
             sl = slice(n + nm, None)
-            hull = (float(np.min(angles)), float(np.max(angles)))
+            hull = (np.min(angles, axis=1), np.max(angles, axis=1))
         else:
             P, valid, motion = self.trace(pose, shape, assembly, self.grid)
             d2, _, seg_ok = _segments(P, valid, T)

@@ -184,6 +184,12 @@ class LocalSearch:
             lo += [-np.inf] + [0.0] * (p.n - 1)
             hi += [np.inf] + [1.0] * (p.n - 1)
             typ += [1.0] * p.n
+        elif p.free_start:
+            assert p.angles is not None  # a prescribed timing comes with its angles
+            columns.append(np.array([c.rel[0] - p.angles[0] for c in starts]))
+            lo.append(-np.inf)
+            hi.append(np.inf)
+            typ.append(1.0)
         elif p.timing == "none":
             columns += list(np.array([c.rel for c in starts]).T)
             lo += [-np.inf] * p.n
@@ -219,6 +225,8 @@ class LocalSearch:
         if p.timing == "prescribed":
             assert p.angles is not None  # a prescribed timing comes with its angles
             rel = np.broadcast_to(p.angles, (B, p.n))
+            if p.free_start:
+                rel = rel + Z[:, j : j + 1]
         elif p.timing == "free":
             t = Z[:, j + 1 :]
             left = np.full(B, p.period)

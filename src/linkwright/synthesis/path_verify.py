@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -19,7 +20,7 @@ from numpy.typing import NDArray
 from linkwright.analysis.general import dyad_transmission_angles
 from linkwright.mechanisms import circuit, input_range
 
-__all__ = ["in_one_arc", "verify_generic"]
+__all__ = ["in_one_arc", "started", "verify_generic"]
 
 Array = NDArray[np.float64]
 DENSE = 720
@@ -38,6 +39,15 @@ def in_one_arc(vmin: float, vmax: float, lo: Array, hi: Array, period: float) ->
         if vmax - k * period <= b + tol and vmin - k * period >= a - tol:
             return True
     return False
+
+
+def started(mech: Any, named: Any, inputs: Array) -> tuple[Any, Any]:
+    """The answer, and its named family's form, starting where its first target lies: the
+    document then names the circuit (the input arc) the answer is on, so that every tool traces
+    that circuit, not the linkage's first (:func:`linkwright.mechanisms.running_circuit`)."""
+    start = float(np.asarray(inputs).ravel()[0])
+    placed = replace(mech, start=start)
+    return placed, (placed if named is mech else replace(named, start=start))
 
 
 def verify_generic(p: Any, cand: Any) -> tuple[dict[str, Any] | None, str]:
@@ -103,6 +113,7 @@ def verify_generic(p: Any, cand: Any) -> tuple[dict[str, Any] | None, str]:
         # one input).
         first = {k: v[0] for k, v in branches.items()}
         mech = named = m.with_branches(mech, first)
+    mech, named = started(mech, named, inputs)
     error = float(np.sum(dist**2))
     return dict(
         mechanism=mech,

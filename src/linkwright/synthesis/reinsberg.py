@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -116,14 +117,15 @@ def _dims(fb: FourBar | SphericalFourBar) -> dict[str, Array]:
 
 
 def _with(fb: FourBar | SphericalFourBar, field: str, value: Array) -> FourBar | SphericalFourBar:
+    change: dict[str, Any] = {field: value}
     if isinstance(fb, SphericalFourBar):
-        return replace(fb, **{field: value})
+        return replace(fb, **change)
     if field == "frame":
         a0, b0 = np.asarray(fb.A0, float), np.asarray(fb.B0, float)
         d = b0 - a0
         along = d / np.linalg.norm(d, axis=-1, keepdims=True)
         return replace(fb, B0=a0 + value[..., None] * along)
-    return replace(fb, **{field: value})
+    return replace(fb, **change)
 
 
 def reinsberg_complete(
