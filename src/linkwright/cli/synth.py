@@ -291,10 +291,12 @@ def _design_report(design: Any, index: tuple[int, ...] = ()) -> dict[str, Any]:
     mech = design.mechanism
     params = {k: np.asarray(v)[index] if np.ndim(v) > (1 if k in ("A0", "B0") else 0) else v
               for k, v in mech.params().items()}  # fmt: skip
+    inputs = np.asarray(design.inputs)[index]
+    # Its start, the input at the first position, names the circuit that passes them.
     one = FourBar(**{k: params[k] for k in ("A0", "B0", "crank", "coupler", "rocker", "u", "v",
-                                              "assembly")})  # fmt: skip
+                                              "assembly")}, start=float(inputs[0]))  # fmt: skip
     out: dict[str, Any] = {
-        "inputs_deg": np.degrees(np.asarray(design.inputs)[index]),
+        "inputs_deg": np.degrees(inputs),
         "branches": np.asarray(design.branches)[index].astype(int),
         "branch_defect": bool(np.asarray(design.branch_defect)[index]),
         "order_defect": bool(np.asarray(design.order_defect)[index]),

@@ -60,8 +60,11 @@ def orientations_from_rows(rows: list[list[float]], where: str) -> Any:
 def _spherical_report(design: Any) -> dict[str, Any]:
     import numpy as np
 
+    from dataclasses import replace
+
+    # Its start, the input at the first orientation, names the circuit that passes them.
     return {
-        "mechanism": design.mechanism,
+        "mechanism": replace(design.mechanism, start=float(np.asarray(design.inputs).ravel()[0])),
         "rotation": np.asarray(design.rotation).tolist(),
         "inputs_deg": np.degrees(design.inputs).tolist(),
         "branches": np.asarray(design.branches).astype(int).tolist(),
