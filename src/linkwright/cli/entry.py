@@ -25,6 +25,7 @@ from linkwright.cli import plot as _plot  # noqa: F401
 from linkwright.cli import serve as _serve  # noqa: F401
 from linkwright.cli import solve as _solve  # noqa: F401
 from linkwright.cli import synth as _synth  # noqa: F401
+from linkwright.cli import synth_function as _synth_function  # noqa: F401
 from linkwright.cli import synth_more as _synth_more  # noqa: F401
 from linkwright.cli import tolerance as _tolerance  # noqa: F401
 from linkwright.cli.shared import CliError, app

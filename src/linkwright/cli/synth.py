@@ -332,44 +332,6 @@ def _pairs(text: str, what: str, width: int = 2) -> list[list[float]]:
     return [parse_floats(r, what, width) for r in rows]
 
 
-@synth_app.command("function")
-def synth_function(
-    pairs: Annotated[
-        str,
-        typer.Option(
-            "--pairs",
-            metavar="PHI,PSI;…",
-            help="Three input/output angle pairs (deg, from the frame line).",
-        ),
-    ],
-    frame: Annotated[float, typer.Option("--frame", metavar="D", help="Frame length.")] = 1.0,
-    as_json: JsonOpt = False,
-) -> None:
-    """Freudenstein function generation: the four-bar whose rocker angle ψ follows the crank
-    angle φ through three precision pairs."""
-    import numpy as np
-
-    from linkwright.synthesis.precision import PrecisionError, freudenstein
-
-    rows = _pairs(pairs, "--pairs")
-    if len(rows) != 3:
-        raise CliError(f"--pairs: Freudenstein's method takes exactly 3 pairs, got {len(rows)}")
-    if not (math.isfinite(frame) and frame > 0):
-        raise CliError("--frame: must be a positive length")
-    phi, psi = np.radians(np.array(rows).T)
-    try:
-        design = freudenstein(phi, psi, frame)
-    except PrecisionError as exc:
-        raise CliError(str(exc)) from None
-    report = documents_json(_design_report(design))
-    if as_json:
-        sys.stdout.write(dump_json(report))
-        return
-    k = report["coefficients"]
-    sys.stdout.write(f"Freudenstein K1 = {k[0]:.9g}, K2 = {k[1]:.9g}, K3 = {k[2]:.9g}\n"
-                     + _design_text(report) + "\n")  # fmt: skip
-
-
 @synth_app.command("motion")
 def synth_motion(
     poses: Annotated[

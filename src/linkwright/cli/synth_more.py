@@ -58,9 +58,9 @@ def orientations_from_rows(rows: list[list[float]], where: str) -> Any:
 
 
 def _spherical_report(design: Any) -> dict[str, Any]:
-    import numpy as np
-
     from dataclasses import replace
+
+    import numpy as np
 
     # Its start, the input at the first orientation, names the circuit that passes them.
     return {

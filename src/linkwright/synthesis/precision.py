@@ -49,6 +49,7 @@ from linkwright.mechanisms import FourBar
 from linkwright.synthesis.function_generation import (
     chebyshev_spacing,
     freudenstein,
+    freudenstein_fit,
     function_error,
     function_pairs,
 )
@@ -83,6 +84,7 @@ __all__ = [
     "first_true",
     "fourbar_from_dyads",
     "freudenstein",
+    "freudenstein_fit",
     "function_error",
     "function_pairs",
     "path_with_timing",
