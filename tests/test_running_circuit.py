@@ -205,3 +205,28 @@ def test_a_synthesised_double_rocker_traces_its_own_answer(tmp_path):
     # (curve length / 4000)² over its curvature radius, far below 1e-6 of the size.
     assert result["error"] <= 1e-12 * size**2
     assert float(np.max(gap)) <= 1e-6 * size
+
+
+@given(shapes, st.floats(0.1, 0.9), st.integers(0, 1))
+def test_targets_on_the_return_leg_are_found_there(shape, where, which):
+    # A nearest-point fit meets its targets on the assembly's leg of the circuit; a target that
+    # lies on the return leg (the other branch) is at distance 0 from the traced curve, and the
+    # report must say so (issue 28, item 6).
+    from linkwright.mechanisms import solve
+    from linkwright.synthesis.path_verify import nearest_on_circuit
+
+    m = _double_rocker(*shape)
+    lo, hi = _arcs(m)[which]
+    theta = np.array([lo + where * (hi - lo)])
+    own = replace(m, start=float(theta[0]))
+    other = solve(replace(own, assembly=-1.0), theta, order=0).positions["P"]
+    here = solve(own, theta, order=0).positions["P"]
+    size = float(max(m.coupler, m.crank, m.B0[0]))
+    apart = float(np.linalg.norm(other - here))
+    if apart < 1e-3 * size:  # the two legs cross here: nothing to find
+        return
+    inputs, reached, dist, branches = nearest_on_circuit(own, other, theta, here, np.array([apart]))
+    assert float(dist[0]) < 1e-7 * size
+    np.testing.assert_allclose(reached, other, atol=1e-7 * size)
+    assert branches is not None and int(branches["B"][0]) == -1
+    assert abs(float(inputs[0] - theta[0])) < 1e-6

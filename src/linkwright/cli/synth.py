@@ -627,6 +627,9 @@ def synth_path(
         "inputs_deg": np.degrees(fit.inputs),
         "angles_deg": np.degrees(fit.angles),
         "distances": fit.distances,
+        # Targets nearest the circuit's return leg: each dyad's sign at each target.
+        **({"branches": {k: np.asarray(v).astype(int) for k, v in fit.branches.items()}}
+           if fit.branches is not None else {}),
         "seconds": fit.elapsed,
         "evaluations": fit.evaluations,
         "stopped": fit.stopped,
@@ -640,6 +643,15 @@ def synth_path(
         + "inputs (deg): "
         + ", ".join(f"{v:.6g}" for v in result["inputs_deg"])
         + "\n"
+        + (
+            "nearest on the circuit's return leg: "
+            + "; ".join(
+                f"{k} signs {np.asarray(v).astype(int).tolist()}" for k, v in fit.branches.items()
+            )
+            + "\n"
+            if fit.branches is not None
+            else ""
+        )
         + (
             "in its paper's frame: the points are R·(its traced point), R = "
             + str(np.round(np.asarray(fit.rotation), 12).tolist())

@@ -139,7 +139,7 @@ class PathFit:
         :class:`SphericalFourBar`, for :mod:`linkwright.analysis`).
     rotation : sphere only: the 3×3 rotation R with (target frame) = R · (paper 000's frame).
     inputs : (N,) the input angles of ``mechanism`` at which it reaches each target (radians;
-        ``solve(fit.mechanism, fit.inputs)`` reproduces ``reached``).
+        ``solve(fit.mechanism, fit.inputs)`` reproduces ``reached`` where ``branches`` is None).
     angles : (N,) the same measured from the frame line (the convention of ``angles``).
     reached : (N, 2) or (N, 3) the traced point at ``inputs``.
     distances : (N,) |reached − target| (chords on the sphere).
@@ -148,6 +148,11 @@ class PathFit:
     elapsed : seconds spent; evaluations : mechanisms evaluated (one per member per pass).
     history : (seconds, evaluations, error) each time the best error improved.
     stopped : ``"target"``, ``"budget"`` or ``"evaluations"``.
+    branches : None, or, where a nearest-point fit (no timing) of a rocking input found targets
+        nearest the circuit's return leg, each dyad's sign at each target (joint name → (N,)):
+        the distances are then to the nearest point of the whole traced circuit, and
+        ``linkwright.engine.evaluate(plan, params, inputs, branches=branches)`` reproduces
+        ``reached``.
     """
 
     family: str
@@ -165,6 +170,7 @@ class PathFit:
     evaluations: int
     history: tuple[tuple[float, int, float], ...] = field(repr=False)
     stopped: str
+    branches: dict[str, Array] | None = None
 
     def time_to(self, error: float) -> float | None:
         """Seconds until the search first reached ``error`` or less (None if it never did)."""

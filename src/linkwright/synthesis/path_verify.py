@@ -18,9 +18,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from linkwright.analysis.general import dyad_transmission_angles
+from linkwright.engine import evaluate
 from linkwright.mechanisms import circuit, input_range
 
-__all__ = ["in_one_arc", "started", "verify_generic"]
+__all__ = ["in_one_arc", "nearest_on_circuit", "started", "verify_generic"]
 
 Array = NDArray[np.float64]
 DENSE = 720
@@ -48,6 +49,59 @@ def started(mech: Any, named: Any, inputs: Array) -> tuple[Any, Any]:
     start = float(np.asarray(inputs).ravel()[0])
     placed = replace(mech, start=start)
     return placed, (placed if named is mech else replace(named, start=start))
+
+
+def nearest_on_circuit(
+    mech: Any, targets: Array, inputs: Array, reached: Array, dist: Array
+) -> tuple[Array, Array, Array, dict[str, Array] | None]:
+    """Each target's nearest point on the whole circuit ``mech`` runs (its ``start`` names it),
+    where that is nearer than the fit's point: (inputs, reached, distances, branches).
+
+    An input that rocks runs its arc up on the assembly and back on the other branch; a
+    nearest-point fit found its points on the first leg, and a target nearer the return leg
+    was reported too far. Here every target is moved to the nearest of a dense sampling of the
+    circuit, then to the foot of its perpendicular by golden-section search in the input on
+    that sample's branches. ``branches`` (every dyad's sign at each target) is None when no
+    target moved to another branch, so that ``solve(mech, inputs)`` still reproduces them.
+    """
+    motion = circuit(mech, DENSE * 4, order=0)
+    P = np.asarray(motion.positions["P"])
+    d2 = np.sum((P[None] - targets[:, None]) ** 2, axis=-1)
+    d2 = np.where(np.isfinite(d2), d2, np.inf)
+    j = np.argmin(d2, axis=1)
+    if not np.any(np.sqrt(d2[np.arange(len(j)), j]) < dist * (1 - 1e-9)):
+        return inputs, reached, dist, None
+    theta = np.asarray(motion.input)
+    signs = {k: np.asarray(v)[j] for k, v in motion.branches.items()}
+    n = len(theta)
+    a, b = theta[(j - 1) % n], theta[(j + 1) % n]
+    a, b = np.minimum(a, b), np.maximum(a, b)
+    a, b = np.minimum(a, theta[j]), np.maximum(b, theta[j])
+
+    def gap2(x: Array) -> Array:
+        found = evaluate(mech.plan, mech.params(), x, points=mech.points, branches=signs, order=0)
+        g = np.sum((np.asarray(found.positions["P"]) - targets) ** 2, axis=-1)
+        return np.where(np.isfinite(g), g, np.inf)
+
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(REFINE_ROUNDS):
+        x1, x2 = b - g * (b - a), a + g * (b - a)
+        left = gap2(x1) <= gap2(x2)
+        a, b = np.where(left, a, x1), np.where(left, x2, b)
+    best = 0.5 * (a + b)
+    # The sample itself where the search's interval left the arc (a limit position).
+    best = np.where(gap2(best) <= d2[np.arange(len(j)), j], best, theta[j])
+    new = np.sqrt(gap2(best))
+    better = new < dist * (1 - 1e-9)
+    if not better.any():
+        return inputs, reached, dist, None
+    params = mech.params()
+    at = evaluate(mech.plan, params, best, points=mech.points, branches=signs, order=0)
+    own = evaluate(mech.plan, params, inputs, points=mech.points, order=0).branches
+    out_inputs = np.where(better, best, inputs)
+    out_reached = np.where(better[:, None], np.asarray(at.positions["P"]), reached)
+    fit_signs = {k: np.where(better, v, np.asarray(own[k])) for k, v in signs.items()}
+    return out_inputs, out_reached, np.where(better, new, dist), fit_signs
 
 
 def verify_generic(p: Any, cand: Any) -> tuple[dict[str, Any] | None, str]:
