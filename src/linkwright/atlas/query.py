@@ -104,7 +104,10 @@ def _query_points(space: str, points: ArrayLike) -> Array:
     if dim == 3:
         r = np.linalg.norm(p, axis=1)
         if np.any(np.abs(r - 1.0) > 0.01):
-            raise AtlasQueryError("points: must be unit vectors on the sphere (within 1 %)")
+            raise AtlasQueryError(
+                "points: must be unit vectors on the sphere (within 1 %); for points on "
+                "another sphere, fit_sphere(points).directions from linkwright.geometry.sphere_fit"
+            )
         p = p / r[:, None]
     span = np.max(np.linalg.norm(p - p.mean(axis=0), axis=1))
     if not span > 1e-12 * max(1.0, float(np.max(np.abs(p)))):

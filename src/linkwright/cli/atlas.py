@@ -22,6 +22,8 @@ from linkwright.cli.shared import (
     family_and_template,
     mechanism_toml,
     read_points,
+    sphere_directions,
+    sphere_text,
 )
 
 atlas_app = typer.Typer(
@@ -153,7 +155,8 @@ def atlas_query(
         typer.Option(
             "--points",
             metavar="FILE.csv",
-            help="The curve: rows x, y (x, y, z unit vectors for a spherical atlas).",
+            help="The curve: rows x, y (x, y, z for a spherical atlas: unit vectors, or points "
+            "on any sphere, which is fitted first).",
         ),
     ],
     directory: Annotated[
@@ -197,7 +200,7 @@ def atlas_query(
         query,
     )
 
-    pts = np.array(read_points(points, (2, 3)))
+    pts, sphere = sphere_directions(np.array(read_points(points, (2, 3))))
     try:
         with Progress("matching", quiet) as progress:
             atlas = open_atlas(directory) if directory is not None else default_atlas(family)
@@ -231,6 +234,7 @@ def atlas_query(
             "mechanism": m.mechanism,
         })  # fmt: skip
     result = documents_json({
+        **({"sphere": sphere} if sphere is not None else {}),
         "atlas": str(atlas.path),
         "family": atlas.family,
         "entries": atlas.count,
@@ -241,7 +245,10 @@ def atlas_query(
     if as_json:
         sys.stdout.write(dump_json(result))
         return
-    lines = [f"{len(matches)} matches from {atlas.count} {atlas.family} curves in {elapsed:.2f} s"]
+    lines = [sphere_text(sphere).rstrip("\n")] if sphere is not None else []
+    lines.append(
+        f"{len(matches)} matches from {atlas.count} {atlas.family} curves in {elapsed:.2f} s"
+    )
     for row, m in zip(result["matches"], matches, strict=True):
         lines.append(
             f"#{row['rank']}  entry {m.atlas_id}: aligned error {m.error:.3%}, RMS distance "

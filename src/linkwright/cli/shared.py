@@ -209,6 +209,43 @@ QuietOpt = Annotated[bool, typer.Option("--quiet", help="No progress bar.")]
 MAX_POINTS = 100_000
 
 
+UNIT_TOL = 0.01
+"""Spherical targets within this of unit length are taken as unit vectors as they are."""
+
+
+def sphere_directions(points: Any) -> tuple[Any, dict[str, Any] | None]:
+    """Spherical targets as unit vectors: as given where they are (within 1 %), else the
+    directions from the centre of the sphere fitted to them, with that sphere's centre,
+    radius and RMS distance (:func:`linkwright.geometry.sphere_fit.fit_sphere`)."""
+    import numpy as np
+
+    from linkwright.geometry.sphere_fit import SphereFitError, fit_sphere
+
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        return pts, None
+    if np.all(np.abs(np.linalg.norm(pts, axis=1) - 1.0) <= UNIT_TOL):
+        return pts, None
+    try:
+        fitted = fit_sphere(pts)
+    except SphereFitError as exc:
+        raise CliError(f"--points: not unit vectors, and {exc}") from None
+    info = {"centre": fitted.centre.tolist(), "radius": fitted.radius, "rms": fitted.rms}
+    return fitted.directions, info
+
+
+def sphere_text(info: dict[str, Any] | None) -> str:
+    """The line that says which sphere the points were put on ("" for unit vectors)."""
+    if info is None:
+        return ""
+    centre = ", ".join(f"{c:.6g}" for c in info["centre"])
+    return (
+        f"the points lie on the sphere of radius {info['radius']:.6g} about ({centre}) "
+        f"(RMS {info['rms']:.3g} off it): fitted as directions from its centre; distances "
+        "below are in units of its radius\n"
+    )
+
+
 def read_points(path: Path, columns: tuple[int, ...] = (2,)) -> list[list[float]]:
     """Rows of numbers from a CSV (comma, semicolon or whitespace separated) point file.
 

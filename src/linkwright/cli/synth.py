@@ -27,6 +27,8 @@ from linkwright.cli.shared import (
     mechanism_toml,
     parse_floats,
     read_points,
+    sphere_directions,
+    sphere_text,
 )
 
 synth_app = typer.Typer(
@@ -487,7 +489,8 @@ def synth_path(
         typer.Option(
             "--points",
             metavar="FILE.csv",
-            help="Target points: rows x, y (x, y, z unit vectors on the sphere).",
+            help="Target points: rows x, y (x, y, z on the sphere: unit vectors, or points on "
+            "any sphere, which is fitted first).",
         ),
     ],
     family: Annotated[
@@ -594,6 +597,9 @@ def synth_path(
         raise CliError(str(exc)) from None
     timing = "prescribed" if angles is not None else "none" if no_timing else "free"
     pts = np.array(read_points(points, (2, 3)))
+    sphere = None
+    if model.space == "sphere":
+        pts, sphere = sphere_directions(pts)
     given = np.radians(parse_floats(angles, "--angles", angle=True)) if angles is not None else None
     in_degrees = ANGLE_BOUNDS | set(getattr(model, "angles", ()))
     bounds = {
@@ -620,6 +626,7 @@ def synth_path(
     # holds a triad): the rotation carries its curve onto the points.
     own_frame = fit.rotation is not None and fit.mechanism is fit.named
     result = documents_json({
+        **({"sphere": sphere} if sphere is not None else {}),
         "error": fit.error,
         "rms": fit.rms,
         **({"rotation": np.asarray(fit.rotation).tolist()} if own_frame else {}),
@@ -638,7 +645,8 @@ def synth_path(
         sys.stdout.write(dump_json(result))
         return
     sys.stdout.write(
-        f"error {fit.error:.6g} (sum of squared distances), RMS {fit.rms:.6g}; "
+        sphere_text(sphere)
+        + f"error {fit.error:.6g} (sum of squared distances), RMS {fit.rms:.6g}; "
         f"{fit.evaluations} linkages in {fit.elapsed:.1f} s, stopped at the {fit.stopped}\n"
         + "inputs (deg): "
         + ", ".join(f"{v:.6g}" for v in result["inputs_deg"])

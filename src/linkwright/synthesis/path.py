@@ -153,7 +153,9 @@ def _targets(model: Model | GenericModel, points: ArrayLike) -> Array:
         if off.size:
             raise PathSynthesisError(
                 f"points: targets on the sphere must be unit vectors (to {SPHERE_TOL}); "
-                f"rows {off[:5].tolist()} have lengths {lengths[off[:5]].round(6).tolist()}"
+                f"rows {off[:5].tolist()} have lengths {lengths[off[:5]].round(6).tolist()} "
+                "(for points on another sphere, fit_sphere(points).directions from "
+                "linkwright.geometry.sphere_fit)"
             )
         pts = pts / lengths[:, None]
     if _diameter(pts) <= 1e-9 * max(1.0, float(np.max(np.abs(pts)))):
