@@ -367,12 +367,37 @@ def synth_motion(
         int | None,
         typer.Option("--pair", metavar="K", min=0, help="5 poses: print only design K."),
     ] = None,
+    approximate: Annotated[
+        bool,
+        typer.Option(
+            "--approximate",
+            help="Least squares for any number of poses (the default from 6): the four-bars "
+            "and slider-cranks that come closest, ranked.",
+        ),
+    ] = False,
+    angle_weight: Annotated[
+        float,
+        typer.Option(
+            "--angle-weight",
+            metavar="W",
+            min=0.0,
+            max=1e6,
+            help="Least squares: how much a radian of angle error weighs against the poses' "
+            "spread.",
+        ),
+    ] = 1.0,
+    top: Annotated[
+        int, typer.Option("--top", metavar="K", min=1, max=100, help="Least squares: designs.")
+    ] = 5,
     as_json: JsonOpt = False,
 ) -> None:
-    """Burmester motion generation: a four-bar guiding a body through 3, 4 or 5 poses. Four
-    poses without --beta2 print the centre-point and circle-point curves as CSV."""
+    """Motion generation: a four-bar guiding a body through 3, 4 or 5 poses exactly
+    (Burmester; four poses without --beta2 print the centre-point and circle-point curves as
+    CSV), or, from 6 poses or with --approximate, the four-bars and slider-cranks that come
+    closest to them (least squares over poses)."""
     import numpy as np
 
+    from linkwright.cli.synth_motion_fit import MAX_POSES, approximate_report, approximate_text
     from linkwright.synthesis.burmester import (
         burmester_fourbars,
         burmester_points,
@@ -383,6 +408,17 @@ def synth_motion(
 
     rows = np.array(read_points(poses, (3,)))
     points, angles = rows[:, :2], np.radians(rows[:, 2])
+    if approximate or len(rows) > 5:
+        if not 3 <= len(rows) <= MAX_POSES:
+            raise CliError(f"--poses: least squares takes 3 to {MAX_POSES} poses, got {len(rows)}")
+        try:
+            fitted = documents_json(approximate_report(points, angles, angle_weight, top))
+        except PrecisionError as exc:
+            raise CliError(str(exc)) from None
+        if not fitted["designs"]:
+            raise CliError("no pair of fitted dyads assembles at every pose")
+        sys.stdout.write(dump_json(fitted) if as_json else approximate_text(fitted) + "\n")
+        return
     try:
         if len(rows) == 3:
             if circles is None:
@@ -428,7 +464,7 @@ def synth_motion(
                 ],
             }
         else:
-            raise CliError(f"--poses: 3, 4 or 5 poses, got {len(rows)}")
+            raise CliError(f"--poses: at least 3 poses, got {len(rows)}")
     except PrecisionError as exc:
         raise CliError(str(exc)) from None
     report = documents_json(report)
