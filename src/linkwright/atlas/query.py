@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -229,10 +229,16 @@ def query(
     tolerance: float = 0.001,
     budget: float = 5.0,
     progress: Callable[[float], None] | None = None,
+    open_curve: bool = False,
 ) -> list[Match]:
     """The ``top`` atlas entries whose curves best match the closed curve through ``points``,
     best first, each placed in the query's frame (module docstring). Refinements that converge
     to one linkage are returned once, so ``refine`` may return fewer than ``top``.
+
+    With ``open_curve`` the points are an open curve, a piece of the curve wanted: every entry
+    is screened for the arc that best matches it, and the best are fitted by iterated closest
+    points (:mod:`linkwright.atlas.partial`); ``error`` is then the RMS distance over the
+    query's RMS radius. Planar atlases only.
 
     Parameters
     ----------
@@ -265,6 +271,10 @@ def query(
         raise AtlasQueryError(f"candidates: must be at least top ({top}), got {want}")
     if not (tolerance > 0):
         raise AtlasQueryError(f"tolerance: must be positive, got {tolerance}")
+    if open_curve:
+        if model.space != "plane":
+            raise AtlasQueryError("open_curve: open curves are matched in the plane only, so far")
+        return _open_query(atlas, model, q, top, want, refine, tolerance, budget, progress)
     variants = describe_variants(family, q[None], atlas.spec.harmonics, template)[0]
     dist, ids = atlas.index.search(variants, variants.shape[0], min(want, atlas.count))
     keep = ids[0] >= 0
@@ -330,6 +340,127 @@ def query(
         matches.sort(key=lambda m: m.distance)
         matches = _distinct(matches, size, set(model.linear) | {"x", "y"})
     return matches
+
+
+SCREEN_SAMPLES = 64
+"""Samples of each entry's curve in the open-curve screen."""
+SCREEN_CHUNK = 20_000
+"""Entries screened at once (the screen holds a few complex arrays of this many curves)."""
+OPEN_SHORTLIST = 1500
+"""Entries of an open-curve screen that go on to a quick fit."""
+OPEN_COARSE = 256
+"""Samples of each shortlisted curve in the quick fit."""
+
+
+def _open_query(
+    atlas: Atlas,
+    model: Any,
+    q: Array,
+    top: int,
+    want: int,
+    refine: bool,
+    tolerance: float,
+    budget: float,
+    progress: Callable[[float], None] | None,
+) -> list[Match]:
+    """:func:`query` for an open curve (its docstring)."""
+    from linkwright.atlas.partial import (
+        QUERY_SAMPLES,
+        by_length,
+        fit_piece,
+        resampled,
+        screen_pieces,
+    )
+
+    family, template = atlas.family, atlas.spec.mechanism
+    most = int(cost.OPEN_SCREEN.value)
+    if atlas.count > most:
+        raise AtlasQueryError(
+            f"open_curve: an open curve is screened against every entry, and this atlas has "
+            f"{atlas.count:,} (at most {most:,}: {cost.OPEN_SCREEN.why}); match it against a "
+            "smaller atlas"
+        )
+    piece = resampled(q, QUERY_SAMPLES)
+    score = np.full(atlas.count, np.inf)
+    ws = np.full(atlas.count, np.nan + 0j)
+    ts = np.full(atlas.count, np.nan + 0j)
+    for start in range(0, atlas.count, SCREEN_CHUNK):
+        cost.check_time()
+        ids = np.arange(start, min(start + SCREEN_CHUNK, atlas.count))
+        traced = curves(family, atlas.designs(ids), 2 * SCREEN_SAMPLES, template)
+        score[ids], ws[ids], ts[ids] = screen_pieces(by_length(traced, SCREEN_SAMPLES), piece)
+        if progress:
+            progress(0.5 * min(1.0, (start + SCREEN_CHUNK) / atlas.count))
+    # A short piece is ambiguous, and the screen's arcs and starts are quantised: many entries
+    # go on to a quick fit (a coarse curve, the query thinned), the best of them to a fine one.
+    shortlist = np.argsort(score, kind="stable")[: min(OPEN_SHORTLIST, atlas.count)]
+    shortlist = shortlist[np.isfinite(score[shortlist])]
+    coarse = curves(family, atlas.designs(shortlist), OPEN_COARSE, template)
+    quick = resampled(q, QUERY_SAMPLES)
+    first = [fit_piece(coarse[k], quick, complex(ws[i]), complex(ts[i]))
+             for k, i in enumerate(shortlist)]  # fmt: skip
+    keep = np.argsort([f[2] for f in first], kind="stable")[: max(want // 2, top)]
+    chosen = shortlist[keep]
+    designs = atlas.designs(chosen)
+    dense = curves(family, designs, DISTANCE_SAMPLES, template)
+    size = _size(model.space, q)
+    # Fitted on the query resampled (its cost is points × curve samples a round), then measured
+    # on every point.
+    fit_points = resampled(q, min(len(q), 2 * QUERY_SAMPLES))
+    fitted = [fit_piece(dense[k], fit_points, first[j][0], first[j][1])
+              for k, j in enumerate(keep)]  # fmt: skip
+    rms = np.array([_distance(q, _carried(dense[k], f[0], f[1])) for k, f in enumerate(fitted)])
+    order = np.argsort(np.where(np.isfinite(rms), rms, np.inf), kind="stable")[:top]
+    w = np.array([f[0] for f in fitted])
+    t = np.array([f[1] for f in fitted])
+    fit = Alignment(
+        error=rms / size, rms=rms, scale=np.abs(w), rotation=np.angle(w),
+        translation=np.stack([t.real, t.imag], -1), reversed=np.zeros(len(w), dtype=bool),
+        shift=np.zeros(len(w)),
+    )  # fmt: skip
+    matches = []
+    for rank, k in enumerate(order):
+        if not np.isfinite(rms[k]):
+            break
+        design = {name: float(v[k]) for name, v in designs.items()}
+        params = _placed_params(model, design, fit, int(k))
+        placed = _Placed(model, params)
+        matches.append(
+            Match(
+                atlas_id=int(chosen[k]),
+                mechanism=placed.user,
+                named=placed.named,
+                error=float(fit.error[k]),
+                distance=float(rms[k]),
+                scale=float(fit.scale[k]),
+                rotation=float(fit.rotation[k]),
+                translation=np.array(fit.translation[k]),
+                descriptor_distance=float(score[chosen[k]]),
+                params=params,
+            )
+        )
+        if progress:
+            progress(0.5 + (0.1 if refine else 0.5) * (rank + 1) / len(order))
+    if refine:
+        points = thinned(q, REFINE_POINTS)
+        for i, m in enumerate(matches[:REFINED]):
+            cost.check_time()
+            better = _refine(model, points, m, size, tolerance, budget, q)
+            if better is not None:
+                matches[i] = better
+            if progress:
+                progress(0.6 + 0.4 * (i + 1) / min(REFINED, len(matches)))
+        # The error of an open match is its distance over the query's size, refined or not.
+        matches = [replace(m, error=m.distance / size) for m in matches]
+        matches.sort(key=lambda m: m.distance)
+        matches = _distinct(matches, size, set(model.linear) | {"x", "y"})
+    return matches
+
+
+def _carried(curve: Array, w: complex, t: complex) -> Array:
+    """Points (n, 2) moved by the similarity p ↦ w·p + t (complex)."""
+    z = w * (curve[:, 0] + 1j * curve[:, 1]) + t
+    return np.stack([z.real, z.imag], -1)
 
 
 def _distinct(matches: list[Match], size: float, scaled: set[str]) -> list[Match]:

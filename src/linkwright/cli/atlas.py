@@ -171,6 +171,13 @@ def atlas_query(
     refine: Annotated[
         bool, typer.Option("--refine", help="Optimise the best matches locally.")
     ] = False,
+    open_curve: Annotated[
+        bool,
+        typer.Option(
+            "--open",
+            help="The points are an open curve, a piece of the curve wanted (planar atlases).",
+        ),
+    ] = False,
     tolerance: Annotated[
         float,
         typer.Option(
@@ -187,8 +194,9 @@ def atlas_query(
     as_json: JsonOpt = False,
     quiet: QuietOpt = False,
 ) -> None:
-    """Match a closed curve against an atlas: the best mechanisms, each placed where the curve
-    was drawn, with its aligned error and the transform from the atlas."""
+    """Match a closed curve (or, with --open, a piece of one) against an atlas: the best
+    mechanisms, each placed where the curve was drawn, with its aligned error and the transform
+    from the atlas."""
     import numpy as np
 
     from linkwright.atlas import (
@@ -207,6 +215,7 @@ def atlas_query(
             t0 = time.perf_counter()
             matches = query(
                 atlas, pts, top=top, refine=refine, tolerance=tolerance, budget=budget,
+                open_curve=open_curve,
                 progress=progress,
             )  # fmt: skip
             elapsed = time.perf_counter() - t0

@@ -197,6 +197,14 @@ ATLAS_COUNT = Budget(
     "The largest atlas measured: 53 min to build, 25.6 GB of disk, 7.2 GB of index in memory; "
     "beyond it the index no longer fits one machine's memory.",
 )
+OPEN_SCREEN = Budget(
+    "open_screen",
+    2_000_000,
+    "entries",
+    "An open curve is screened against every entry of the atlas (no descriptor indexes a piece "
+    "of a curve): 100,000 entries take 5 s on the 2-core reference machine, so this many take "
+    "about 100 s, the most a command should compute unasked.",
+)
 ATLAS_SAMPLES = Budget(
     "atlas_samples",
     4096,
@@ -231,6 +239,7 @@ BUDGETS: dict[str, Budget] = {
         COMBINATIONS,
         REFINE_POINTS,
         ATLAS_COUNT,
+        OPEN_SCREEN,
         ATLAS_SAMPLES,
         ATLAS_CURVE_SAMPLES,
         SHARD_BYTES,
