@@ -12,17 +12,15 @@ atlas's curve, to 1e-5 of its size, the chord error of 4,000 samples). A curve t
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from synth_helpers import polyline_distance, run_cli
 
 from linkwright.atlas import open_atlas
 from linkwright.atlas.families import CODE, atlas_model, curves
-from linkwright.cli import main
 from linkwright.io.documents import load_example, mechanism_to_dict, save_document
 from linkwright.mechanisms import circuit, circuits, input_range
 
@@ -46,22 +44,6 @@ CASES = [
 ]
 
 
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
-
-
-def _polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarray:
-    a, b = curve, np.roll(curve, -1, axis=0)
-    d = b - a
-    rel = points[:, None, :] - a[None]
-    t = np.clip(np.sum(rel * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300), 0.0, 1.0)
-    gap = rel - t[..., None] * d
-    return np.sqrt(np.min(np.sum(gap * gap, -1), axis=1))
-
-
 @pytest.mark.parametrize(("family", "example", "count"), CASES)
 def test_a_tiny_atlas_of_every_family(tmp_path, family, example, count):
     out = tmp_path / "atlas"
@@ -72,12 +54,12 @@ def test_a_tiny_atlas_of_every_family(tmp_path, family, example, count):
     if example is not None:
         args += ["--template", str(EXAMPLES / f"{example}.toml")]
         template = load_example(example).mechanism
-    code, text, err = _run(*args)
+    code, text, err = run_cli(*args)
     assert code == 0, err
     manifest = json.loads(text)
     assert manifest["spec"]["family"] == family and len(manifest["shards"]) == 2
     assert manifest["params"][-1] == CODE
-    assert _run("atlas", "info", str(out), "--quick")[0] == 0
+    assert run_cli("atlas", "info", str(out), "--quick")[0] == 0
 
     atlas = open_atlas(out)
     designs = atlas.designs(np.arange(count))
@@ -102,7 +84,7 @@ def test_a_tiny_atlas_of_every_family(tmp_path, family, example, count):
             inputs = motion.input
             if np.all(np.diff(inputs) > 0) and inputs[-1] - inputs[0] > 2 * np.pi * 0.99:
                 curve = motion.positions[mech.traced_joint]
-                gaps.append(float(np.max(_polyline_distance(points, curve))))
+                gaps.append(float(np.max(polyline_distance(points, curve))))
         assert gaps and min(gaps) <= 1e-5 * size, (i, gaps)
     if template is not None and template.family == "linkage":
         # Its structure is the template's: same joints, same traced joint.
@@ -115,12 +97,12 @@ def test_a_tiny_atlas_of_every_family(tmp_path, family, example, count):
         doc = tmp_path / "entry.toml"
         one = model.local({k: v[entry] for k, v in shape.items()}, designs[CODE][entry])
         save_document(mechanism_to_dict(one), doc)
-        code, text, err = _run("curve", str(doc), "--csv", "-n", "200")
+        code, text, err = run_cli("curve", str(doc), "--csv", "-n", "200")
         assert code == 0, err
         rows = [line.split(",")[1:-1] for line in text.splitlines()[1:]]
         csv = tmp_path / "curve.csv"
         csv.write_text("\n".join(",".join(r) for r in rows) + "\n")
-        code, text, err = _run("atlas", "query", str(out), "--points", str(csv), "--top", "1",
+        code, text, err = run_cli("atlas", "query", str(out), "--points", str(csv), "--top", "1",
                                "--json")  # fmt: skip
         assert code == 0, err
         best = json.loads(text)["matches"][0]
@@ -140,7 +122,7 @@ def test_a_tiny_atlas_of_every_family(tmp_path, family, example, count):
     ],
 )  # fmt: skip
 def test_bad_builds_are_one_line(tmp_path, args, words):
-    code, out, err = _run(
+    code, out, err = run_cli(
         "atlas", "build", "--count", "10", "--out", str(tmp_path / "a"), "--quiet", *args
     )
     assert code == 2 and out == ""
@@ -156,7 +138,7 @@ def test_a_family_that_rarely_turns_fully_is_refused_in_bounded_time(tmp_path):
     doc["mechanism"]["joints"][2]["length"] = 400.0  # a crank many times the links it drives
     far.write_text(json.dumps(doc))
     far = far.rename(far.with_suffix(".json"))
-    code, _, err = _run(
+    code, _, err = run_cli(
         "atlas", "build", "--family", "linkage", "--template", str(far), "--count", "5",
         "--out", str(tmp_path / "a"), "--workers", "0", "--quiet",
     )  # fmt: skip

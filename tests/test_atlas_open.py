@@ -8,8 +8,6 @@ checked against a direct computation of the same residual.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 from dataclasses import replace
 from pathlib import Path
@@ -18,11 +16,11 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
+from synth_helpers import run_cli
 
 from linkwright.atlas import AtlasQueryError, build, open_atlas, query
 from linkwright.atlas.families import curves
 from linkwright.atlas.partial import resampled, screen_pieces
-from linkwright.cli import main
 from linkwright.engine import cost
 from linkwright.mechanisms import solve
 
@@ -55,7 +53,7 @@ def _piece(atlas, entry, scale, angle, shift, start, share, backwards):
 
 
 @settings(
-    max_examples=4,
+    max_examples=2,
     deadline=None,
     derandomize=True,
     suppress_health_check=[HealthCheck.function_scoped_fixture],
@@ -123,19 +121,12 @@ def test_open_queries_are_bounded_and_planar(fourbars, monkeypatch):
         query(atlas, piece, open_curve=True)
 
 
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
-
-
 def test_atlas_query_open_on_the_command_line(fourbars, tmp_path):
     atlas = open_atlas(fourbars)
     piece = curves("fourbar", atlas.designs([17]), 300)[0][20:140]
     table = tmp_path / "piece.csv"
     np.savetxt(table, piece, delimiter=",")
-    code, out, err = _run("atlas", "query", str(fourbars), "--points", str(table), "--open",
+    code, out, err = run_cli("atlas", "query", str(fourbars), "--points", str(table), "--open",
                           "--top", "2", "--json", "--quiet")  # fmt: skip
     assert code == 0, err
     result = json.loads(out)

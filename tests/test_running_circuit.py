@@ -11,9 +11,7 @@ answer lies on.
 
 from __future__ import annotations
 
-import contextlib
 import csv
-import io
 import json
 import math
 from dataclasses import replace
@@ -22,8 +20,8 @@ import numpy as np
 import pytest
 from hypothesis import example, given
 from hypothesis import strategies as st
+from synth_helpers import polyline_distance, run_cli
 
-from linkwright.cli import main
 from linkwright.io import mechanism_to_dict, parse_document
 from linkwright.io.files import load_document, save_document
 from linkwright.mechanisms import FourBar, InvalidMechanism, circuit, circuits, running_circuit
@@ -119,13 +117,6 @@ def test_a_batch_runs_on_one_circuit_number_or_says_so():
         replace(m, start=float("nan"))
 
 
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
-
-
 def test_documents_keep_start_and_every_face_traces_its_arc(tmp_path):
     m = _double_rocker(3.0, 4.0, 0.5, 0.5)
     arcs = _arcs(m)
@@ -136,12 +127,12 @@ def test_documents_keep_start_and_every_face_traces_its_arc(tmp_path):
     assert doc.mechanism.start == pytest.approx(sum(arcs[1]) / 2, abs=1e-12)
     assert doc.raw["mechanism"]["start"] == pytest.approx(math.degrees(sum(arcs[1]) / 2))
 
-    code, out, err = _run("curve", str(path), "--json", "-n", "40")
+    code, out, err = run_cli("curve", str(path), "--json", "-n", "40")
     assert code == 0, err
     assert _inside(np.radians(json.loads(out)["input_deg"]), arcs[1])
 
     exported = tmp_path / "second-arc.csv"
-    code, out, err = _run("export", str(path), "--out", str(exported), "--samples", "40")
+    code, out, err = run_cli("export", str(path), "--out", str(exported), "--samples", "40")
     assert code == 0, err
     with exported.open() as handle:
         theta = [float(row["theta_rad"]) for row in csv.DictReader(handle)]
@@ -165,16 +156,6 @@ def test_a_start_that_is_not_an_angle_is_one_line():
         parse_document(body)
 
 
-def _polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarray:
-    """Distance from each point to the closed polyline ``curve`` (projection on segments)."""
-    a, b = curve, np.roll(curve, -1, axis=0)
-    d = b - a
-    rel = points[:, None, :] - a[None]
-    t = np.clip(np.sum(rel * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300), 0.0, 1.0)
-    gap = rel - t[..., None] * d
-    return np.sqrt(np.min(np.sum(gap * gap, -1), axis=1))
-
-
 def test_a_synthesised_double_rocker_traces_its_own_answer(tmp_path):
     # Points on a double rocker's second arc. The search finds an exact fit (here another
     # double rocker, whose answer lies on its second arc too): `curve` on the printed document
@@ -186,7 +167,7 @@ def test_a_synthesised_double_rocker_traces_its_own_answer(tmp_path):
     points = solve(m, np.radians(angles), order=0).positions["P"]
     table = tmp_path / "points.csv"
     np.savetxt(table, points, delimiter=",")
-    code, out, err = _run(
+    code, out, err = run_cli(
         "synth", "path", "--family", "fourbar", "--points", str(table), "--json", "--quiet",
         "--angles", ",".join(f"{a:.12f}" for a in angles), "--seed", "1",
         "--budget", "600", "--evaluations", "100000",
@@ -196,11 +177,11 @@ def test_a_synthesised_double_rocker_traces_its_own_answer(tmp_path):
     assert "start" in result["mechanism"]["mechanism"]
     document = tmp_path / "fit.json"
     document.write_text(json.dumps(result["mechanism"]))
-    code, out, err = _run("curve", str(document), "--json", "-n", "4000")
+    code, out, err = run_cli("curve", str(document), "--json", "-n", "4000")
     assert code == 0, err
     drawn = np.array([p for p in json.loads(out)["points"] if p is not None])
     size = float(np.ptp(points, axis=0).max())
-    gap = _polyline_distance(points, drawn)
+    gap = polyline_distance(points, drawn)
     # The fit is exact (its error is printed); the 4,000-sample polyline's chords add at most
     # (curve length / 4000)² over its curvature radius, far below 1e-6 of the size.
     assert result["error"] <= 1e-12 * size**2

@@ -7,8 +7,6 @@ on the points' directions from its centre.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
 
@@ -16,8 +14,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from synth_helpers import run_cli
 
-from linkwright.cli import main
 from linkwright.geometry.sphere_fit import SphereFitError, fit_sphere
 from linkwright.mechanisms import SphericalFourBar, circuit
 
@@ -32,8 +30,9 @@ def _cap_points(rng, centre, radius, cap, n):
     e2 = np.cross(axis, e1)
     polar = np.arccos(rng.uniform(np.cos(cap), 1.0, n))
     turn = rng.uniform(0, 2 * np.pi, n)
-    # The cap's rim, so that the points are never nearly coplanar by chance.
-    polar[:3] = cap
+    # Three points on the cap's rim (on the equator for a cap past it: the rim of a whole
+    # sphere is one point), so that the points are never nearly coplanar by chance.
+    polar[:3] = min(cap, np.pi / 2)
     turn[:3] = [0.0, 2.1, 4.2]
     around = np.cos(turn)[:, None] * e1 + np.sin(turn)[:, None] * e2
     directions = np.cos(polar)[:, None] * axis + np.sin(polar)[:, None] * around
@@ -93,13 +92,6 @@ def test_points_that_fix_no_sphere_are_refused(points, words):
         fit_sphere(points)
 
 
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
-
-
 @pytest.fixture
 def flap_path(tmp_path):
     """Paper 000's Fig. 6 coupler curve, shrunk to a radius of 0.059 about (0.1, 0.2, 0.3)."""
@@ -113,7 +105,7 @@ def flap_path(tmp_path):
 
 
 def test_synth_path_fits_the_sphere_of_its_targets(flap_path):
-    code, out, err = _run(
+    code, out, err = run_cli(
         "synth", "path", "--family", "spherical-fourbar", "--points", str(flap_path),
         "--no-timing", "--closed", "--json", "--quiet", "--evaluations", "3000",
         "--budget", "600",
@@ -122,7 +114,7 @@ def test_synth_path_fits_the_sphere_of_its_targets(flap_path):
     result = json.loads(out)
     np.testing.assert_allclose(result["sphere"]["centre"], [0.1, 0.2, 0.3], atol=1e-12)
     assert result["sphere"]["radius"] == pytest.approx(0.059, rel=1e-12)
-    code, out, err = _run(
+    code, out, err = run_cli(
         "synth", "path", "--family", "spherical-fourbar", "--points", str(flap_path),
         "--no-timing", "--quiet", "--evaluations", "2000", "--budget", "600",
     )  # fmt: skip
@@ -131,7 +123,7 @@ def test_synth_path_fits_the_sphere_of_its_targets(flap_path):
 
 
 def test_atlas_query_fits_the_sphere_of_its_curve(flap_path):
-    code, out, err = _run(
+    code, out, err = run_cli(
         "atlas", "query", "--family", "spherical-fourbar", "--points", str(flap_path),
         "--top", "2", "--json", "--quiet",
     )  # fmt: skip
@@ -144,7 +136,7 @@ def test_atlas_query_fits_the_sphere_of_its_curve(flap_path):
 def test_planar_points_given_for_the_sphere_are_one_line(tmp_path):
     table = tmp_path / "flat.csv"
     np.savetxt(table, [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [2, 3, 0]], delimiter=",")
-    code, out, err = _run("synth", "path", "--family", "spherical-fourbar", "--points",
+    code, out, err = run_cli("synth", "path", "--family", "spherical-fourbar", "--points",
                           str(table), "--no-timing", "--quiet")  # fmt: skip
     assert code != 0 and out == ""
     assert err.count("\n") == 1 and "not unit vectors, and the points lie in one plane" in err

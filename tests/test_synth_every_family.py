@@ -14,16 +14,14 @@ points' size (the curve is traced at 4,000 samples; the projection's own error i
 
 from __future__ import annotations
 
-import contextlib
-import io
 import itertools
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from synth_helpers import polyline_distance, run_cli
 
-from linkwright.cli import main
 from linkwright.io.documents import load_example, mechanism_to_dict, parse_document, save_document
 from linkwright.mechanisms import circuits, solve
 from linkwright.mechanisms.parameters import parameter_vector
@@ -51,13 +49,6 @@ CASES = [
     ("spherical-stephenson3", "paper001-stephenson3", False, 100_000),
     ("spherical-stephenson3", "paper001-fg", True, 20_000),
 ]
-
-
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
 
 
 def _segment_targets(mech, count: int = 7):
@@ -93,16 +84,6 @@ def _nudged(mech, share: float = 0.01):
     return vector.from_vector(mech, x)
 
 
-def _polyline_distance(points: np.ndarray, curve: np.ndarray) -> np.ndarray:
-    """Distance from each point to the closed polyline ``curve`` (projection on segments)."""
-    a, b = curve, np.roll(curve, -1, axis=0)
-    d = b - a
-    rel = points[:, None, :] - a[None]
-    t = np.clip(np.sum(rel * d, -1) / np.maximum(np.sum(d * d, -1), 1e-300), 0.0, 1.0)
-    gap = rel - t[..., None] * d
-    return np.sqrt(np.min(np.sum(gap * gap, -1), axis=1))
-
-
 @pytest.mark.parametrize(("family", "example", "with_template", "evaluations"), CASES)
 def test_synth_path_fits_points_of_a_known_linkage(
     tmp_path, family, example, with_template, evaluations
@@ -122,7 +103,7 @@ def test_synth_path_fits_points_of_a_known_linkage(
         template = tmp_path / "template.toml"
         save_document(mechanism_to_dict(_nudged(known)), template)
         args += ["--template", str(template)]
-    code, out, err = _run(*args)
+    code, out, err = run_cli(*args)
     assert code == 0, err
     result = json.loads(out)
     document = tmp_path / "fit.json"
@@ -132,10 +113,10 @@ def test_synth_path_fits_points_of_a_known_linkage(
 
     # Re-traced by `linkwright curve`: the circuit the document names (its start), which must
     # be the one the answer lies on (issue 28).
-    code, out, err = _run("curve", str(document), "--json", "-n", "4000")
+    code, out, err = run_cli("curve", str(document), "--json", "-n", "4000")
     assert code == 0, err
     drawn = np.array([p for p in json.loads(out)["points"] if p is not None]) @ turn.T
-    gap = _polyline_distance(points, drawn)
+    gap = polyline_distance(points, drawn)
     assert np.sqrt(np.mean(gap**2)) <= TOLERANCE * size
 
     # The printed error, recomputed at the printed inputs (the document's configuration there).
@@ -166,7 +147,9 @@ def test_bad_requests_are_one_line(tmp_path, args, words):
     on_sphere = any("paper001" in a for a in args)
     rows = "1,0,0\n0,1,0\n0,0,1\n0.6,0.8,0\n" if on_sphere else "0,0\n1,0\n1,1\n0,1\n"
     csv.write_text(rows)
-    code, out, err = _run("synth", "path", "--points", str(csv), "--budget", "1", "--quiet", *args)
+    code, out, err = run_cli(
+        "synth", "path", "--points", str(csv), "--budget", "1", "--quiet", *args
+    )
     assert code == 2 and out == ""
     assert words in err and err.count("\n") == 1, err
 
@@ -180,7 +163,7 @@ def test_the_templates_numbers_start_the_search_only(tmp_path):
     save_document(mechanism_to_dict(_nudged(known)), template)
     csv = tmp_path / "points.csv"
     np.savetxt(csv, points, delimiter=",")
-    code, out, err = _run(
+    code, out, err = run_cli(
         "synth", "path", "--template", str(template), "--points", str(csv), "--json", "--quiet",
         "--angles", ",".join(f"{a:.12f}" for a in np.degrees(inputs)), "--budget", "10",
     )  # fmt: skip

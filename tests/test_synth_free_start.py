@@ -8,28 +8,17 @@ which must reproduce the targets and keep the prescribed steps exactly.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, assume, given, settings
+from hypothesis import assume, given
 from hypothesis import strategies as st
+from synth_helpers import FAST, run_cli
 
-from linkwright.cli import main
 from linkwright.mechanisms import FourBar, solve
 from linkwright.synthesis.path import PathSynthesisError, fit_path
 
-# As the other round trips (tests/test_synth_path.py): few, derandomised examples; a search
-# stopped by an evaluation count gives the same answer on any machine.
-FAST = settings(
-    max_examples=3,
-    deadline=None,
-    derandomize=True,
-    phases=[Phase.explicit, Phase.reuse, Phase.generate],
-    suppress_health_check=[HealthCheck.filter_too_much],
-)
 EXACT_FIT = {"budget": 600, "max_evaluations": 200_000}
 
 
@@ -71,13 +60,6 @@ def test_a_free_start_needs_prescribed_angles():
         fit_path("fourbar", pts, timing="free", free_start=True)
 
 
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
-
-
 def test_synth_path_free_start_on_the_command_line(tmp_path):
     true = FourBar(A0=[0, 0], B0=[4, 0], crank=1, coupler=4, rocker=3.5, u=2, v=1)
     steps = np.arange(6) * 60.0
@@ -85,9 +67,9 @@ def test_synth_path_free_start_on_the_command_line(tmp_path):
     table = tmp_path / "points.csv"
     np.savetxt(table, pts, delimiter=",")
     common = ["synth", "path", "--family", "fourbar", "--points", str(table), "--quiet"]
-    code, _, err = _run(*common, "--free-start")
+    code, _, err = run_cli(*common, "--free-start")
     assert code != 0 and err.count("\n") == 1 and "give --angles too" in err
-    code, out, err = _run(
+    code, out, err = run_cli(
         *common, "--json", "--angles", ",".join(f"{a:g}" for a in steps), "--free-start",
         "--seed", "1", "--budget", "600", "--evaluations", "200000",
     )  # fmt: skip

@@ -9,8 +9,6 @@ intersection written here.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
 
@@ -18,8 +16,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from synth_helpers import run_cli
 
-from linkwright.cli import main
 from linkwright.mechanisms import solve
 from linkwright.synthesis.precision import (
     PrecisionError,
@@ -101,18 +99,11 @@ def test_too_few_pairs_are_refused():
         freudenstein_fit([0.1, 0.2], [0.3, 0.4])
 
 
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
-
-
 @pytest.mark.parametrize(
     ("points", "spacing"), [(3, "chebyshev"), (9, "even"), (5, "1,1.2,1.5,1.8,2")]
 )
 def test_synth_function_over_a_range_prints_its_structural_error(points, spacing):
-    code, out, err = _run(
+    code, out, err = run_cli(
         "synth", "function", "--function", "log10(x)", "--x-range", "1:2", "--phi-range",
         "30:120", "--psi-range", "60:150", "--points", str(points), "--spacing", spacing,
         "--json",
@@ -185,6 +176,6 @@ def test_synth_function_over_a_range_prints_its_structural_error(points, spacing
     ],
 )
 def test_bad_function_requests_are_one_line(args, words):
-    code, out, err = _run("synth", "function", *args)
+    code, out, err = run_cli("synth", "function", *args)
     assert code != 0 and out == ""
     assert err.count("\n") == 1 and words in err, err

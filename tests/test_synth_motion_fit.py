@@ -9,29 +9,19 @@ least-squares optimum (no nearby linkage does better).
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import given
 from hypothesis import strategies as st
+from synth_helpers import FAST, run_cli
 
-from linkwright.cli import main
 from linkwright.io import parse_document
 from linkwright.mechanisms import FourBar, SliderCrank, solve
 from linkwright.synthesis.motion_fit import fit_motion
 from linkwright.synthesis.precision_designs import PrecisionError
-
-FEW = settings(
-    max_examples=3,
-    deadline=None,
-    derandomize=True,
-    phases=[Phase.explicit, Phase.reuse, Phase.generate],
-    suppress_health_check=[HealthCheck.filter_too_much],
-)
 
 
 def _poses(mech, inputs):
@@ -55,7 +45,7 @@ def _recomputed(fit, points, angles, weight, spread):
     return dp, da, float(np.sum(dp**2 + (weight * spread * da) ** 2))
 
 
-@FEW
+@FAST
 @given(st.integers(0, 2**32 - 1), st.integers(6, 10))
 def test_poses_of_a_known_four_bar_are_met(seed, n):
     rng = np.random.default_rng(seed)
@@ -107,13 +97,6 @@ def test_too_few_poses_are_refused(points, angles):
         fit_motion(points, angles)
 
 
-def _run(*args: str) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return code, out.getvalue(), err.getvalue()
-
-
 def test_synth_motion_ranks_linkages_for_many_poses(tmp_path):
     rng = np.random.default_rng(1)
     true = FourBar(A0=[0, 0], B0=[2, 0], crank=1, coupler=2.5, rocker=1.5, u=1, v=0.5)
@@ -121,7 +104,7 @@ def test_synth_motion_ranks_linkages_for_many_poses(tmp_path):
     points = points + rng.normal(scale=0.01, size=points.shape)
     table = tmp_path / "poses.csv"
     np.savetxt(table, np.c_[points, np.degrees(angles)], delimiter=",")
-    code, out, err = _run("synth", "motion", "--poses", str(table), "--top", "3", "--json")
+    code, out, err = run_cli("synth", "motion", "--poses", str(table), "--top", "3", "--json")
     assert code == 0, err
     report = json.loads(out)
     assert report["method"] == "least squares" and len(report["designs"]) == 3
@@ -132,5 +115,5 @@ def test_synth_motion_ranks_linkages_for_many_poses(tmp_path):
         m = solve(mech, np.radians(d["inputs_deg"]), order=0)
         miss = np.linalg.norm(m.positions["P"] - points, axis=1)
         assert math.sqrt(np.mean(miss**2)) == pytest.approx(d["rms_position_error"], rel=1e-6)
-    code, out, err = _run("synth", "motion", "--poses", str(table), "--top", "1")
+    code, out, err = run_cli("synth", "motion", "--poses", str(table), "--top", "1")
     assert code == 0 and out.startswith("# 1 linkages nearest to 8 poses")

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, Phase, assume, given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
+from synth_helpers import FAST
 
 from linkwright.analysis.planar import fourbar_class, slidercrank_class
 from linkwright.analysis.spherical import spherical_class
@@ -36,16 +37,6 @@ from linkwright.synthesis.path import (
 )
 from linkwright.synthesis.path_families import MODELS, path_margin
 
-# Few examples, no shrinking (a fit takes seconds; the seed alone names the case), and the
-# same examples on every run: a global search can miss on a rare hard case, and a test that
-# fails once in a hundred runs says nothing useful.
-FAST = settings(
-    max_examples=3,
-    deadline=None,
-    derandomize=True,
-    phases=[Phase.explicit, Phase.reuse, Phase.generate],
-    suppress_health_check=[HealthCheck.filter_too_much],
-)
 SEEDS = st.integers(0, 2**32 - 1)
 # The round trips stop on an evaluation count, not on seconds: a search cut by the clock ends
 # at a different place on a slower or busier machine (measured with budget=600: the fits reach

@@ -284,7 +284,7 @@ def synth_reinsberg(
     )
 
 
-def _design_report(design: Any, index: tuple[int, ...] = ()) -> dict[str, Any]:
+def design_report(design: Any, index: tuple[int, ...] = ()) -> dict[str, Any]:
     """A precision design (one of a batch at ``index``) as plain values, angles in degrees."""
     import numpy as np
 
@@ -314,7 +314,7 @@ def _design_report(design: Any, index: tuple[int, ...] = ()) -> dict[str, Any]:
     return out
 
 
-def _design_text(report: Mapping[str, Any]) -> str:
+def design_text(report: Mapping[str, Any]) -> str:
     lines = ["inputs (deg): " + ", ".join(f"{v:.6g}" for v in report["inputs_deg"])]
     if report["branch_defect"]:
         lines.append("warning: branch defect (the positions need different assembly modes)")
@@ -329,7 +329,8 @@ def _design_text(report: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _pairs(text: str, what: str, width: int = 2) -> list[list[float]]:
+def angle_pairs(text: str, what: str, width: int = 2) -> list[list[float]]:
+    """Rows of ``width`` numbers from "a,b;c,d;…" (or one row a line), checked as ``what``."""
     rows = [r for r in text.replace("\n", ";").split(";") if r.strip()]
     return [parse_floats(r, what, width) for r in rows]
 
@@ -426,7 +427,7 @@ def synth_motion(
             design = three_pose_fourbar(
                 points, angles, np.reshape(parse_floats(circles, "--circles", 4), (2, 2))
             )
-            report: Any = _design_report(design)
+            report: Any = design_report(design)
         elif len(rows) == 4:
             if beta2 is None:
                 from linkwright.io.exports import number_text
@@ -444,7 +445,7 @@ def synth_motion(
             ij = [int(v) for v in parse_floats(closure, "--closure", 2)]
             if any(v not in (0, 1) for v in ij):
                 raise CliError("--closure: each must be 0 or 1")
-            report = _design_report(four_pose_fourbar(points, angles, b, tuple(ij)))
+            report = design_report(four_pose_fourbar(points, angles, b, tuple(ij)))
         elif len(rows) == 5:
             found = burmester_points(points, angles)
             designs, pairs = burmester_fourbars(points, angles)
@@ -459,7 +460,7 @@ def synth_motion(
             report = {
                 "burmester_points": int(found.count),
                 "designs": [
-                    {"pair": [int(v) for v in pairs[k]], **_design_report(designs, (k,))}
+                    {"pair": [int(v) for v in pairs[k]], **design_report(designs, (k,))}
                     for k in chosen
                 ],
             }
@@ -474,10 +475,10 @@ def synth_motion(
     if "designs" in report:
         text = [f"# {report['burmester_points']} real Burmester points"]
         for d in report["designs"]:
-            text.append(f"## design with Burmester points {d['pair']}\n" + _design_text(d))
+            text.append(f"## design with Burmester points {d['pair']}\n" + design_text(d))
         sys.stdout.write("\n".join(text) + "\n")
     else:
-        sys.stdout.write(_design_text(report) + "\n")
+        sys.stdout.write(design_text(report) + "\n")
 
 
 @synth_app.command("precision-path")
@@ -511,11 +512,11 @@ def synth_precision_path(
         design = path_with_timing(pts, *rot)
     except PrecisionError as exc:
         raise CliError(str(exc)) from None
-    report = documents_json(_design_report(design))
+    report = documents_json(design_report(design))
     if as_json:
         sys.stdout.write(dump_json(report))
         return
-    sys.stdout.write(_design_text(report) + "\n")
+    sys.stdout.write(design_text(report) + "\n")
 
 
 @synth_app.command("path")

@@ -15,7 +15,7 @@ import typer
 from numpy.typing import NDArray
 
 from linkwright.cli.shared import CliError, JsonOpt, documents_json, dump_json, parse_floats
-from linkwright.cli.synth import _design_report, _design_text, _pairs, synth_app
+from linkwright.cli.synth import angle_pairs, design_report, design_text, synth_app
 
 MAX_PAIRS = 1000
 """The most precision pairs a least-squares fit takes (each costs one engine solve a step)."""
@@ -174,7 +174,7 @@ def synth_function(
         raise CliError("give --pairs, or --function with its ranges, not both")
     f = None
     if pairs is not None:
-        rows = _pairs(pairs, "--pairs")
+        rows = angle_pairs(pairs, "--pairs")
         if not 3 <= len(rows) <= MAX_PAIRS:
             raise CliError(f"--pairs: give 3 to {MAX_PAIRS} pairs, got {len(rows)}")
         phi, psi = np.radians(np.array(rows).T)
@@ -198,7 +198,7 @@ def synth_function(
         design = freudenstein_fit(phi, psi, frame)
     except PrecisionError as exc:
         raise CliError(str(exc)) from None
-    report = documents_json(_design_report(design))
+    report = documents_json(design_report(design))
     report["method"] = "exact" if len(phi) == 3 else "least squares"
     if f is not None:
         xs, err = function_error(design, f, (x0, x1), ranges[0], ranges[1], ERROR_SAMPLES)
@@ -217,7 +217,7 @@ def synth_function(
         f"Freudenstein K1 = {k[0]:.9g}, K2 = {k[1]:.9g}, K3 = {k[2]:.9g} "
         f"({report['method']}, {len(phi)} pairs)\n"
     )
-    sys.stdout.write(head + _design_text(report) + "\n")
+    sys.stdout.write(head + design_text(report) + "\n")
     if f is not None:
         sys.stdout.write(_error_table(report["structural_error"], f) + "\n")
 
