@@ -300,45 +300,13 @@ def query(
         dense = dense + fit.translation[order][:, None, :]
     matches: list[Match] = []
     for rank, k in enumerate(order):
-        design = {name: float(v[k]) for name, v in designs.items()}
-        params = _placed_params(model, design, fit, int(k))
-        placed = _Placed(model, params)
-        scale: float
-        rotation: float | Array
-        translation: Array | None
-        if isinstance(fit, SphereAlignment):
-            scale, rotation, translation = 1.0, np.array(fit.rotation[k]), None
-        else:
-            scale, rotation = float(fit.scale[k]), float(fit.rotation[k])
-            translation = np.array(fit.translation[k])
         matches.append(
-            Match(
-                atlas_id=int(ids[k]),
-                mechanism=placed.user,
-                named=placed.named,
-                error=float(fit.error[k]),
-                distance=_distance(q, dense[rank]),
-                scale=scale,
-                rotation=rotation,
-                translation=translation,
-                descriptor_distance=float(dist[k]),
-                params=params,
-            )
+            _match(model, designs, fit, int(k), int(ids[k]), _distance(q, dense[rank]), dist[k])
         )
         if progress:
             progress(0.2 * (rank + 1) / len(order) if refine else (rank + 1) / len(order))
     if refine:
-        chosen = matches[:REFINED]
-        fitted = thinned(q, REFINE_POINTS)
-        for i, m in enumerate(chosen):
-            cost.check_time()
-            better = _refine(model, fitted, m, size, tolerance, budget, q)
-            if better is not None:
-                matches[i] = better
-            if progress:
-                progress(0.2 + 0.8 * (i + 1) / len(chosen))
-        matches.sort(key=lambda m: m.distance)
-        matches = _distinct(matches, size, set(model.linear) | {"x", "y"})
+        matches = _refine_best(model, q, matches, size, tolerance, budget, progress, 0.2)
     return matches
 
 
@@ -396,8 +364,7 @@ def _open_query(
     shortlist = np.argsort(score, kind="stable")[: min(OPEN_SHORTLIST, atlas.count)]
     shortlist = shortlist[np.isfinite(score[shortlist])]
     coarse = curves(family, atlas.designs(shortlist), OPEN_COARSE, template)
-    quick = resampled(q, QUERY_SAMPLES)
-    first = [fit_piece(coarse[k], quick, complex(ws[i]), complex(ts[i]))
+    first = [fit_piece(coarse[k], piece, complex(ws[i]), complex(ts[i]))
              for k, i in enumerate(shortlist)]  # fmt: skip
     keep = np.argsort([f[2] for f in first], kind="stable")[: max(want // 2, top)]
     chosen = shortlist[keep]
@@ -422,39 +389,76 @@ def _open_query(
     for rank, k in enumerate(order):
         if not np.isfinite(rms[k]):
             break
-        design = {name: float(v[k]) for name, v in designs.items()}
-        params = _placed_params(model, design, fit, int(k))
-        placed = _Placed(model, params)
         matches.append(
-            Match(
-                atlas_id=int(chosen[k]),
-                mechanism=placed.user,
-                named=placed.named,
-                error=float(fit.error[k]),
-                distance=float(rms[k]),
-                scale=float(fit.scale[k]),
-                rotation=float(fit.rotation[k]),
-                translation=np.array(fit.translation[k]),
-                descriptor_distance=float(score[chosen[k]]),
-                params=params,
-            )
+            _match(model, designs, fit, int(k), int(chosen[k]), rms[k], score[chosen[k]])
         )
         if progress:
             progress(0.5 + (0.1 if refine else 0.5) * (rank + 1) / len(order))
     if refine:
-        points = thinned(q, REFINE_POINTS)
-        for i, m in enumerate(matches[:REFINED]):
-            cost.check_time()
-            better = _refine(model, points, m, size, tolerance, budget, q)
-            if better is not None:
-                matches[i] = better
-            if progress:
-                progress(0.6 + 0.4 * (i + 1) / min(REFINED, len(matches)))
+        matches = _refine_best(model, q, matches, size, tolerance, budget, progress, 0.6)
         # The error of an open match is its distance over the query's size, refined or not.
         matches = [replace(m, error=m.distance / size) for m in matches]
-        matches.sort(key=lambda m: m.distance)
-        matches = _distinct(matches, size, set(model.linear) | {"x", "y"})
     return matches
+
+
+def _match(
+    model: Any,
+    designs: dict[str, Array],
+    fit: Alignment | SphereAlignment,
+    k: int,
+    atlas_id: int,
+    distance: float,
+    descriptor_distance: float,
+) -> Match:
+    """Entry ``k`` of ``designs`` carried by ``fit`` into the query's frame, as a match."""
+    design = {name: float(v[k]) for name, v in designs.items()}
+    params = _placed_params(model, design, fit, k)
+    placed = _Placed(model, params)
+    scale: float
+    rotation: float | Array
+    translation: Array | None
+    if isinstance(fit, SphereAlignment):
+        scale, rotation, translation = 1.0, np.array(fit.rotation[k]), None
+    else:
+        scale, rotation = float(fit.scale[k]), float(fit.rotation[k])
+        translation = np.array(fit.translation[k])
+    return Match(
+        atlas_id=atlas_id,
+        mechanism=placed.user,
+        named=placed.named,
+        error=float(fit.error[k]),
+        distance=float(distance),
+        scale=scale,
+        rotation=rotation,
+        translation=translation,
+        descriptor_distance=float(descriptor_distance),
+        params=params,
+    )
+
+
+def _refine_best(
+    model: Any,
+    q: Array,
+    matches: list[Match],
+    size: float,
+    tolerance: float,
+    budget: float,
+    progress: Callable[[float], None] | None,
+    done: float,
+) -> list[Match]:
+    """The best :data:`REFINED` matches refined (each kept only where better), all of them
+    sorted by distance and without repeats; ``progress`` runs on from ``done`` to 1."""
+    chosen = matches[:REFINED]
+    fitted = thinned(q, REFINE_POINTS)
+    for i, m in enumerate(chosen):
+        cost.check_time()
+        better = _refine(model, fitted, m, size, tolerance, budget, q)
+        if better is not None:
+            matches[i] = better
+        if progress:
+            progress(done + (1.0 - done) * (i + 1) / len(chosen))
+    matches.sort(key=lambda m: m.distance)
+    return _distinct(matches, size, set(model.linear) | {"x", "y"})
 
 
 def _carried(curve: Array, w: complex, t: complex) -> Array:
