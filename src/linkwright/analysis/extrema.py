@@ -24,11 +24,14 @@ GOLDEN_STEPS = 90
 CIRCUIT_SAMPLES = 1024
 
 
-def golden_max(f: Callable[[Array], Array], a: Array, b: Array) -> tuple[Array, Array]:
+def golden_max(
+    f: Callable[[Array], Array], a: Array, b: Array, steps: int = GOLDEN_STEPS
+) -> tuple[Array, Array]:
     """Maximise unimodal ``f`` on each bracket [a, b] (batched); returns (argmax, max).
 
-    90 golden steps shrink any bracket below the spacing of doubles; the end points are kept as
-    candidates so a maximum sitting on an end (a limit position) is found exactly.
+    90 golden steps (the default) shrink any bracket below the spacing of doubles; fewer do
+    where the answer needs less. The end points are kept as candidates so a maximum sitting on
+    an end (a limit position) is found exactly.
 
     >>> x, fx = golden_max(lambda t: -(t - 0.3) ** 2, np.array([0.0]), np.array([1.0]))
     >>> float(np.round(x[0], 10)), float(fx[0])
@@ -40,7 +43,7 @@ def golden_max(f: Callable[[Array], Array], a: Array, b: Array) -> tuple[Array, 
     c = hi - INV_PHI * (hi - lo)
     d = lo + INV_PHI * (hi - lo)
     fc, fd = f(c), f(d)
-    for _ in range(GOLDEN_STEPS):
+    for _ in range(steps):
         left = fc >= fd
         hi = np.where(left, d, hi)
         lo = np.where(left, lo, c)

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from linkwright.analysis.extrema import golden_max
 from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, solve
 from linkwright.synthesis.precision_designs import PrecisionError, pose_set
 
@@ -452,13 +453,6 @@ def _nearest_inputs(
     grid = natural[:, None] + offsets
     k = np.argmin(cost(grid), axis=1)
     step = offsets[1] - offsets[0]
-    lo, hi = grid[np.arange(len(p)), k] - step, grid[np.arange(len(p)), k] + step
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    for _ in range(30):
-        x1, x2 = hi - g * (hi - lo), lo + g * (hi - lo)
-        left = cost(x1) <= cost(x2)
-        lo, hi = np.where(left, lo, x1), np.where(left, x2, hi)
-    best = 0.5 * (lo + hi)
-    return np.asarray(
-        np.where(cost(best) <= cost(grid[np.arange(len(p)), k]), best, grid[np.arange(len(p)), k])
-    )
+    nearest = grid[np.arange(len(p)), k]
+    best, least = golden_max(lambda t: -cost(t), nearest - step, nearest + step, steps=30)
+    return np.asarray(np.where(-least <= cost(nearest), best, nearest))

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from linkwright.analysis.extrema import golden_max
 from linkwright.analysis.general import dyad_transmission_angles
 from linkwright.engine import evaluate
 from linkwright.mechanisms import circuit, input_range
@@ -27,7 +28,7 @@ Array = NDArray[np.float64]
 DENSE = 720
 """Samples of the period on which a candidate's whole circuit is checked."""
 REFINE_ROUNDS = 40
-"""Golden-section rounds that move a nearest-point fit's inputs to their targets' feet."""
+"""Golden-section steps that move a nearest-point fit's inputs to their targets' feet."""
 
 
 def in_one_arc(vmin: float, vmax: float, lo: Array, hi: Array, period: float) -> bool:
@@ -78,24 +79,20 @@ def nearest_on_circuit(
     a, b = np.minimum(a, b), np.maximum(a, b)
     a, b = np.minimum(a, theta[j]), np.maximum(b, theta[j])
 
+    params = mech.params()
+
     def gap2(x: Array) -> Array:
-        found = evaluate(mech.plan, mech.params(), x, points=mech.points, branches=signs, order=0)
+        found = evaluate(mech.plan, params, x, points=mech.points, branches=signs, order=0)
         g = np.sum((np.asarray(found.positions["P"]) - targets) ** 2, axis=-1)
         return np.where(np.isfinite(g), g, np.inf)
 
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    for _ in range(REFINE_ROUNDS):
-        x1, x2 = b - g * (b - a), a + g * (b - a)
-        left = gap2(x1) <= gap2(x2)
-        a, b = np.where(left, a, x1), np.where(left, x2, b)
-    best = 0.5 * (a + b)
+    foot, closest = golden_max(lambda x: -gap2(x), a, b, steps=REFINE_ROUNDS)
     # The sample itself where the search's interval left the arc (a limit position).
-    best = np.where(gap2(best) <= d2[np.arange(len(j)), j], best, theta[j])
+    best = np.where(-closest <= d2[np.arange(len(j)), j], foot, theta[j])
     new = np.sqrt(gap2(best))
     better = new < dist * (1 - 1e-9)
     if not better.any():
         return inputs, reached, dist, None
-    params = mech.params()
     at = evaluate(mech.plan, params, best, points=mech.points, branches=signs, order=0)
     own = evaluate(mech.plan, params, inputs, points=mech.points, order=0).branches
     out_inputs = np.where(better, best, inputs)
@@ -215,16 +212,10 @@ def _reproject(
     now = np.sum((here - targets) ** 2, axis=-1)
     now = np.where(np.isfinite(now), now, np.inf)
     step = dense[1] - dense[0]
-    a, b = dense[j] - step, dense[j] + step
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    for _ in range(REFINE_ROUNDS):
-        x1, x2 = b - g * (b - a), a + g * (b - a)
-        q = reach(np.concatenate([x1, x2]) + psi)[0]
-        f = np.sum((q - np.concatenate([targets, targets])) ** 2, axis=-1)
-        f = np.where(np.isfinite(f), f, np.inf)
-        left = f[: len(targets)] <= f[len(targets) :]
-        a, b = np.where(left, a, x1), np.where(left, x2, b)
-    best = 0.5 * (a + b)
-    fb = np.sum((reach(best + psi)[0] - targets) ** 2, axis=-1)
-    fb = np.where(np.isfinite(fb), fb, np.inf)
-    return np.where(fb < now, best, rel)
+
+    def gap2(x: Array) -> Array:
+        g = np.sum((reach(x + psi)[0] - targets) ** 2, axis=-1)
+        return np.where(np.isfinite(g), g, np.inf)
+
+    best, closest = golden_max(lambda x: -gap2(x), dense[j] - step, dense[j] + step, REFINE_ROUNDS)
+    return np.where(-closest < now, best, rel)
