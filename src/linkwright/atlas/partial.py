@@ -92,8 +92,9 @@ def screen_pieces(curves: Array, query: Array) -> tuple[Array, CArray, CArray]:
             np.add.at(ones, index, 1.0)
             # corr(u, h)[s] = Σ_k u[s + k]·conj(h[k]) = ifft(fft(u)·conj(fft(h))).
             cross = np.fft.ifft(fc * np.conj(np.fft.fft(np.conj(spikes))), axis=-1)
-            total = np.fft.ifft(fplain * np.conj(np.fft.fft(ones)), axis=-1)
-            power = np.fft.ifft(fc2 * np.conj(np.fft.fft(ones)), axis=-1).real
+            counts = np.conj(np.fft.fft(ones))
+            total = np.fft.ifft(fplain * counts, axis=-1)
+            power = np.fft.ifft(fc2 * counts, axis=-1).real
             spread = power - np.abs(total) ** 2 / m
             with np.errstate(invalid="ignore", divide="ignore"):
                 rel = 1.0 - np.abs(cross) ** 2 / (energy * spread)
