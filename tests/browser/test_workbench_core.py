@@ -163,6 +163,21 @@ def test_rocker_input_marks_and_explains_limit_positions(page: Any, server_url: 
     page.keyboard.press("ArrowLeft")
     assert _at(page) == pytest.approx(circ["input"][-1])
 
+    # picking the other circuit writes it into the document (its start, an input on its arc),
+    # one undoable step, so that a save, a share link and the CLI trace the circuit picked here
+    other = scene["modes"][own]["circuits"][1]["input"]
+    steps = page.evaluate("lw.history().undo")
+    before = _scenes(page)
+    page.select_option("#circuit-select", "1")
+    _settle(page, before)
+    start = page.evaluate("lw.document().mechanism.start")
+    assert min(other) - 1e-6 <= start <= max(other) + 1e-6
+    assert not (min(circ["input"]) <= start <= max(circ["input"]))
+    assert page.input_value("#circuit-select") == "1"
+    assert page.evaluate("lw.history()") == {"undo": steps + 1, "redo": 0, "dirty": True}
+    page.evaluate("lw.undo()")
+    page.wait_for_function("lw.document().mechanism.start === undefined")
+
 
 def test_edit_a_field_redraws_the_curve(page: Any, server_url: str) -> None:
     _open(page, server_url, "crank-rocker")

@@ -443,11 +443,16 @@ class LocalSearch:
         if not self.sphere:
             pose[2] = wrap_angle(pose[2])
         periodic = self.p.model.periodic
+        rel = rel[0]
+        if self.p.timing != "prescribed" or self.p.free_start:
+            # Where the inputs start is found, not given: report it in the first period (the
+            # refinement lets it wander by whole turns, which change nothing).
+            rel = rel - self.p.period * np.floor(rel[0] / self.p.period)
         return Candidate(
             float(self.best_err[k]),
             float(self.best_obj[k]),
             pose,
             {n: float(wrap_angle(v[0]) if n in periodic else v[0]) for n, v in shape.items()},
             float(self.assembly[k]),
-            rel[0],
+            rel,
         )

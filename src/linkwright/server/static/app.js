@@ -7,7 +7,9 @@
  * contract in the server package), and starts the page. */
 
 import { $, clamp, clone, finite, mulMM, orthonormal, rotX, rotY } from "./util.js";
-import { angDist, api, currentPose, requestScene, setBusy, state, status } from "./pipeline.js";
+import {
+  angDist, api, currentPose, ownModeIndex, requestScene, setBusy, state, status,
+} from "./pipeline.js";
 import {
   currentCircuit, fillChoosers, loadExample, loadFamily, renderLegend, setAtIndex, setHoverLimit,
   setPlaying, stepSample,
@@ -500,6 +502,14 @@ function wire() {
     });
     state.cur.circuit = c;
     setAtIndex(best);
+    // The document names the circuit it runs on by an input on it (its start), so that a save,
+    // an export, a share link and the CLI all trace the one picked here.
+    const at = circ.input[best];
+    if (state.doc && state.doc.mechanism && finite(at) && state.cur.mode === ownModeIndex(sc)) {
+      const doc = clone(state.doc);
+      doc.mechanism.start = Math.round(at * 1e6) / 1e6;
+      requestScene(doc, at);
+    }
   });
   $("family-select").addEventListener("change", (e) => loadFamily(e.target.value));
   $("example-select").addEventListener("change", (e) => {
