@@ -20,7 +20,14 @@ from synth_helpers import run_cli
 
 from linkwright.atlas import AtlasQueryError, build, open_atlas, query
 from linkwright.atlas.families import curves
-from linkwright.atlas.partial import resampled, screen_pieces
+from linkwright.atlas.partial import (
+    _nuclear_traces,
+    fit_sphere_pieces,
+    kabsch,
+    resampled,
+    screen_pieces,
+    screen_sphere_pieces,
+)
 from linkwright.engine import cost
 from linkwright.mechanisms import solve
 
@@ -113,7 +120,7 @@ def test_the_screen_is_the_similarity_residual_at_every_start():
     assert score[0] == pytest.approx(best, abs=1e-9)
 
 
-def test_open_queries_are_bounded_and_planar(fourbars, monkeypatch):
+def test_open_queries_are_bounded(fourbars, monkeypatch):
     atlas = open_atlas(fourbars)
     piece = resampled(curves("fourbar", atlas.designs([3]), 200)[0][:80], 40)
     monkeypatch.setattr(cost, "OPEN_SCREEN", replace(cost.OPEN_SCREEN, value=5_000))
@@ -133,3 +140,118 @@ def test_atlas_query_open_on_the_command_line(fourbars, tmp_path):
     assert len(result["matches"]) == 2
     size = float(np.sqrt(np.mean(np.sum((piece - piece.mean(0)) ** 2, axis=1))))
     assert result["matches"][0]["distance"] < 2e-3 * size
+
+
+# -- on the sphere ---------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def spherical(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("atlas") / "spherical"
+    build("spherical-fourbar", 3_000, out, shard_size=3_000, workers=0)
+    return out
+
+
+def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    k = axis / np.linalg.norm(axis)
+    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
+
+
+def _sphere_polyline_rms(points: np.ndarray, curve: np.ndarray) -> float:
+    """RMS chord distance from points to a closed polyline of unit vectors, by dense
+    subdivision of its segments (then back onto the sphere)."""
+    a, b = curve, np.roll(curve, -1, axis=0)
+    t = np.linspace(0.0, 1.0, 50, endpoint=False)
+    dense = (a[:, None, :] + t[None, :, None] * (b - a)[:, None, :]).reshape(-1, 3)
+    dense /= np.linalg.norm(dense, axis=1, keepdims=True)
+    d2 = np.min(np.sum((points[:, None, :] - dense[None]) ** 2, axis=-1), axis=1)
+    return float(np.sqrt(np.mean(d2)))
+
+
+@settings(
+    max_examples=2,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+    phases=[Phase.explicit, Phase.generate],
+)
+@given(
+    entry=st.integers(0, 2_999),
+    axis=st.tuples(*[st.floats(-1.0, 1.0, **finite)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
+    angle=st.floats(-np.pi, np.pi, **finite),
+    start=st.integers(0, 399),
+    share=st.floats(0.3, 0.8),
+    backwards=st.booleans(),
+)
+def test_a_piece_of_a_spherical_entry_turned_anywhere_is_matched_truthfully(
+    spherical, entry, axis, angle, start, share, backwards
+):
+    atlas = open_atlas(spherical)
+    local = curves("spherical-fourbar", atlas.designs([entry]), 400)[0]
+    turn = _rotation(np.array(axis), angle)
+    piece = np.roll(local @ turn.T, -start, axis=0)[: int(share * 400)]
+    piece = piece[::-1] if backwards else piece
+    centre = piece.mean(0) / np.linalg.norm(piece.mean(0))
+    size = float(np.sqrt(np.mean(np.sum((piece - centre) ** 2, axis=1))))
+    best = query(atlas, piece, top=3, open_curve=True, refine=False)[0]
+    traced = solve(best.mechanism, np.linspace(0, 2 * np.pi, 4096, endpoint=False), order=0)
+    measured = _sphere_polyline_rms(piece, traced.positions["P"])
+    # What must always hold: the distance reported is the one to the placed linkage's curve.
+    assert best.distance == pytest.approx(measured, abs=1e-3 * size)
+    assert measured < 0.05 * size
+    assert best.error == pytest.approx(best.distance / size)
+
+
+def test_a_piece_of_a_spherical_entry_finds_it(spherical):
+    atlas = open_atlas(spherical)
+    local = curves("spherical-fourbar", atlas.designs([1419]), 400)[0]
+    piece = (local @ _rotation(np.array([0.3, -0.8, 0.5]), 2.1).T)[40:260]
+    centre = piece.mean(0) / np.linalg.norm(piece.mean(0))
+    size = float(np.sqrt(np.mean(np.sum((piece - centre) ** 2, axis=1))))
+    best = query(atlas, piece, top=3, open_curve=True, refine=False)[0]
+    assert best.atlas_id == 1419
+    traced = solve(best.mechanism, np.linspace(0, 2 * np.pi, 4096, endpoint=False), order=0)
+    assert _sphere_polyline_rms(piece, traced.positions["P"]) < 1e-2 * size
+
+
+@given(st.integers(0, 2**32 - 1))
+@settings(max_examples=20, deadline=None)
+def test_the_closed_form_singular_values_and_kabsch(seed):
+    rng = np.random.default_rng(seed)
+    # Near-singular matrices too: rank 1 and 2, where the cubic's roots meet.
+    h = rng.normal(size=(3, 3, 3))
+    h[1] = np.outer(rng.normal(size=3), rng.normal(size=3))
+    h[2][2] = h[2][0] + h[2][1]
+    s = np.linalg.svd(h, compute_uv=False)
+    expected = s[:, 0] + s[:, 1] + np.sign(np.linalg.det(h)) * s[:, 2]
+    np.testing.assert_allclose(_nuclear_traces(h), expected, atol=1e-6 * np.max(s))
+    # Kabsch lays a turned point set back exactly, with a proper rotation.
+    p = rng.normal(size=(7, 3))
+    turn = _rotation(rng.normal(size=3), rng.uniform(-np.pi, np.pi))
+    found = kabsch(p, p @ turn.T)
+    np.testing.assert_allclose(found, turn, atol=1e-10)
+    assert np.linalg.det(found) == pytest.approx(1.0)
+
+
+def test_the_sphere_screen_is_the_rotation_residual_at_every_start():
+    rng = np.random.default_rng(5)
+    curve = rng.normal(size=(1, 64, 3))
+    curve /= np.linalg.norm(curve, axis=-1, keepdims=True)
+    query_points = rng.normal(size=(16, 3))
+    query_points /= np.linalg.norm(query_points, axis=-1, keepdims=True)
+    score, turn = screen_sphere_pieces(curve, query_points)
+    # Directly: every arc share, start and direction, the best rotation's mean squared chord.
+    best = np.inf
+    for b in (query_points, query_points[::-1]):
+        for share in (0.125, 0.1875, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0):
+            length = max(round(share * 64), 4, 2)
+            index = np.round(np.linspace(0.0, length - (share == 1.0), 16)).astype(int)
+            for s0 in range(64):
+                a = curve[0, (s0 + index) % 64]
+                r = kabsch(a, b)
+                best = min(best, float(np.mean(np.sum((a @ r.T - b) ** 2, axis=1))))
+    assert score[0] == pytest.approx(best, abs=1e-9)
+    # The fit from the screen's rotation only improves on it.
+    _, rms = fit_sphere_pieces(curve, query_points, turn)
+    assert rms[0] ** 2 <= score[0] + 1e-12

@@ -176,6 +176,19 @@ def test_match_recovers_a_spherical_fourbar(client: TestClient) -> None:
     assert not (root / f"fourbar-{ATLAS_COUNT}-seed0-v1").exists()
 
 
+def test_match_an_open_piece_of_a_spherical_curve(client: TestClient) -> None:
+    """Half of paper 000's Fig. 6 coupler curve, turned and sent as an open curve: every entry
+    is screened for the arc that matches it, and the refined best runs within 1 % of the
+    piece's size (its distance is to the whole placed curve, so the piece need not close)."""
+    R = rotation(np.array([-0.4, 0.2, 0.6, 0.5]))
+    points = traced("paper000-fig6", 96)[:48] @ R.T
+    res = post(client, {"points": points.tolist(), "top": 2, "refine": True, "open": True})
+    check_recovered(res, points, 0.01)
+    # Taken as closed, the same half-curve is a different shape, matched far less well.
+    closed = post(client, {"points": points.tolist(), "top": 2, "refine": True})
+    assert closed["candidates"][0]["relative"] > 2 * res["candidates"][0]["relative"]
+
+
 _QUATERNION = st.tuples(*[st.floats(-1.0, 1.0, allow_nan=False)] * 4).filter(
     lambda q: math.fsum(c * c for c in q) > 0.05
 )

@@ -172,6 +172,28 @@ def test_csv_of_directions_matches_on_the_sphere(page, server_url: str, tmp_path
     _pick_best_and_check(page, target)
 
 
+def test_an_open_piece_matches_on_the_sphere(page, server_url: str, tmp_path: Path) -> None:
+    """Half of the example's coupler curve, as directions, matched as an open curve: the
+    target is drawn open, every entry is screened for a matching arc, and the picked
+    candidate runs along the piece."""
+    open_workbench(page, server_url)
+    show_tab(page, "synthesis")
+    P = page.evaluate("lw.scene().modes.find((m) => m.own).circuits[0].positions.P.filter(Boolean)")
+    target = [p for i, p in enumerate(P[: len(P) // 2]) if i % 3 == 0]
+    path = tmp_path / "piece.csv"
+    path.write_text("x,y,z\n" + "\n".join(",".join(repr(float(c)) for c in p) for p in target))
+    page.set_input_files("#synth-csv", str(path))
+    page.wait_for_selector(f"#tab-synthesis[data-target='{len(target)}']")
+    assert "taken as closed" in page.inner_text("#synth-target-info")
+    page.check("#synth-open")
+    assert "taken as open" in page.inner_text("#synth-target-info")
+    page.click("#synth-match")
+    wait_state(page, "synthesis", timeout=120_000)
+    best = float(page.locator("[data-testid=synth-candidate]").first.get_attribute("data-error"))
+    assert best < 0.01, best
+    _pick_best_and_check(page, target)
+
+
 def test_csv_rows_must_all_be_alike(page, server_url: str, tmp_path: Path) -> None:
     open_workbench(page, server_url)
     show_tab(page, "synthesis")

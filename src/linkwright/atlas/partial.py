@@ -21,7 +21,15 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["by_length", "fit_piece", "resampled", "screen_pieces"]
+__all__ = [
+    "by_length",
+    "fit_piece",
+    "fit_sphere_pieces",
+    "kabsch",
+    "resampled",
+    "screen_pieces",
+    "screen_sphere_pieces",
+]
 
 Array = NDArray[np.float64]
 CArray = NDArray[np.complex128]
@@ -31,6 +39,9 @@ QUERY_SAMPLES = 32
 ARC_SHARES = (0.125, 0.1875, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875, 1.0)
 """The arcs tried, as shares of the curve's samples."""
 FIT_ROUNDS = 40
+NEWTON_STEPS = 60
+"""Newton steps to the largest root of the rotation residual's quartic: a simple root is
+reached in under ten, a double one halves the error each step."""
 SLIDE = 0.05
 """Weight of the point-to-point term in the fit: enough to stop sliding, small enough not to
 pull the feet along the curve."""
@@ -161,3 +172,147 @@ def fit_piece(curve: Array, query: Array, w: complex, t: complex) -> tuple[compl
             break
         w, t = complex(x[0], x[1]), complex(x[2], x[3])
     return best
+
+
+def _nuclear_traces(h: Array) -> Array:
+    """max over rotations R of tr(R·hᵀ) for 3 × 3 matrices h (..., 3, 3): σ1 + σ2 ± σ3, the
+    last with the sign of det h (Kabsch), for millions of matrices in a few array operations.
+
+    It is the largest root of the quartic (x² − p)² − 8·det(h)·x + 2·(tr(M²) − p²) (M = hᵀh,
+    p = tr M), Theobald's quaternion characteristic polynomial (Acta Cryst. A61, 2005):
+    expand e1² = p + 2·e2 and e2² = Σ(σiσj)² + 2·e1·e3 in the signed σ's symmetric functions.
+    Newton's method from the upper bound √(3p) descends to it monotonically (the quartic's
+    roots are all real, so it is convex beyond the largest); where two roots meet (a rank-
+    deficient h) it still closes to about √ε of the scale, unlike the trigonometric roots of
+    M's characteristic cubic, whose square roots lose half the digits of the smallest.
+    """
+    m = np.einsum("...ki,...kj->...ij", h, h)
+    p = np.trace(m, axis1=-2, axis2=-1)
+    c1 = -8.0 * np.linalg.det(h)
+    c0 = 2.0 * (np.sum(m * m, axis=(-2, -1)) - p * p)
+    x = np.sqrt(3.0 * p)
+    for _ in range(NEWTON_STEPS):
+        square = x * x - p
+        slope = 4.0 * x * square + c1
+        value = square * square + c1 * x + c0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            step = value / slope
+        # Above the root the value and slope are positive. At a double root both vanish and
+        # rounding may leave no root at all: a slope that small (x² − p within 1e-9 of p) is
+        # as close as the digits allow, and ends it.
+        x = x - np.where((value > 0) & (slope > 1e-9 * x * p), step, 0.0)
+    out: Array = x
+    return out
+
+
+def kabsch(points: Array, onto: Array) -> Array:
+    """The rotations R (..., 3, 3), det +1, that best lay ``points`` (..., m, 3) on ``onto``
+    (..., m, 3): least Σ |R·p − q|² (Kabsch's construction from the SVD of Σ q pᵀ)."""
+    u, _, vt = np.linalg.svd(np.swapaxes(onto, -1, -2) @ points)
+    d = np.where(np.linalg.det(u @ vt) < 0, -1.0, 1.0)
+    u = u * np.stack([np.ones_like(d), np.ones_like(d), d], -1)[..., None, :]
+    out: Array = u @ vt
+    return out
+
+
+def screen_sphere_pieces(curves: Array, query: Array) -> tuple[Array, Array]:
+    """The sphere's screen: for curves (K, N, 3) and an open query (m, 3), unit vectors, each
+    curve's least mean squared chord over every arc and start (K,) once the arc is turned onto
+    the query by its best rotation about the centre, and that rotation (K, 3, 3).
+
+    For a start s, with a_s the arc's m samples, the residual is Σ|a_s|² + Σ|b|² − 2·(σ1 + σ2
+    ± σ3), the σ those of S = Σ b aᵀ (Kabsch); each of S's nine entries, for every s at once,
+    is the correlation of one coordinate of the curve with a kernel of m spikes.
+    """
+    k_count, n, _ = curves.shape
+    m = len(query)
+    best = np.full(k_count, np.inf)
+    best_s = np.zeros(k_count, dtype=int)
+    best_index = np.zeros((k_count, m), dtype=int)
+    best_backwards = np.zeros(k_count, dtype=bool)
+    coords = np.fft.rfft(curves, axis=1)  # (K, n//2 + 1, 3)
+    norms = np.fft.rfft(np.sum(curves**2, axis=-1), axis=1)
+    valid = np.all(np.isfinite(curves), axis=(1, 2))
+    for backwards in (False, True):
+        b = query[::-1] if backwards else query
+        energy = float(np.sum(b**2))
+        for share in ARC_SHARES:
+            length = max(round(share * n), m // 4, 2)
+            index = np.round(np.linspace(0.0, length - (share == 1.0), m)).astype(int) % n
+            spikes = np.zeros((n, 3))
+            np.add.at(spikes, index, b)
+            ones = np.zeros(n)
+            np.add.at(ones, index, 1.0)
+            kernel = np.conj(np.fft.rfft(spikes, axis=0))  # (n//2 + 1, 3)
+            # s[k, t, i, j] = Σ_k' b_i · a_j at start t: corr(a_j, spike_i).
+            cross = np.fft.irfft(
+                coords[:, :, None, :] * kernel[None, :, :, None], n=n, axis=1
+            )  # (K, n, 3, 3)
+            power = np.fft.irfft(norms * np.conj(np.fft.rfft(ones))[None], n=n, axis=1)
+            residual = power + energy - 2.0 * _nuclear_traces(cross)
+            residual = np.where(valid[:, None], residual, np.inf)
+            s = np.argmin(residual, axis=-1)
+            here = residual[np.arange(k_count), s] / m
+            better = here < best
+            best = np.where(better, here, best)
+            best_s = np.where(better, s, best_s)
+            best_index[better] = index[None]
+            best_backwards = np.where(better, backwards, best_backwards)
+    rotation = np.full((k_count, 3, 3), np.nan)
+    for k in np.flatnonzero(np.isfinite(best)):
+        arc = curves[k, (best_s[k] + best_index[k]) % n]
+        rotation[k] = kabsch(arc, query[::-1] if best_backwards[k] else query)
+    return best, rotation
+
+
+FIT_BLOCK = 256
+"""Curves fitted together on the sphere (each round holds points × samples of each)."""
+
+
+def fit_sphere_pieces(curves: Array, query: Array, rotations: Array) -> tuple[Array, Array]:
+    """Iterated closest points on the sphere, for many curves at once: from ``rotations``
+    (K, 3, 3), the rotations about the centre carrying each closed dense curve (K, n, 3)
+    nearest the query's points (m, 3), and the RMS chord distances then (K,). Each round finds
+    every point's foot on each turned curve (its segments), then the rotation that best lays
+    the feet on the points (Kabsch); a curve keeps its best round.
+    """
+    if len(curves) > FIT_BLOCK:
+        parts = [
+            fit_sphere_pieces(curves[i : i + FIT_BLOCK], query, rotations[i : i + FIT_BLOCK])
+            for i in range(0, len(curves), FIT_BLOCK)
+        ]
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    k_count, n = curves.shape[:2]
+    best_rotation = np.array(rotations, dtype=float)
+    best_rms = np.full(k_count, np.inf)
+    going = np.all(np.isfinite(best_rotation), axis=(1, 2))
+    rotation = np.where(going[:, None, None], best_rotation, np.eye(3))
+    for _ in range(FIT_ROUNDS):
+        if not going.any():
+            break
+        idx = np.flatnonzero(going)
+        own = curves[idx]
+        sub = np.arange(len(idx))[:, None]
+        # In each curve's own frame: the query turned back by its rotation. The nearest sample
+        # is the one of largest dot product (unit vectors); the foot is on a segment beside it.
+        back = query[None] @ rotation[idx]  # (k, m, 3)
+        near = np.argmax(np.einsum("kmc,knc->kmn", back, own), axis=-1)
+        gap = np.full(near.shape, np.inf)
+        feet = np.zeros(back.shape)
+        for first in (near - 1, near):
+            a, b = own[sub, first % n], own[sub, (first + 1) % n]
+            seg = b - a
+            with np.errstate(invalid="ignore", divide="ignore"):
+                t = np.clip(np.sum((back - a) * seg, -1) / np.sum(seg * seg, -1), 0.0, 1.0)
+            foot = a + np.nan_to_num(t)[..., None] * seg
+            here = np.linalg.norm(back - foot, axis=-1)
+            nearer = here < gap
+            gap = np.where(nearer, here, gap)
+            feet = np.where(nearer[..., None], foot, feet)
+        rms = np.sqrt(np.mean(gap**2, axis=-1))
+        improved = rms < best_rms[idx] * (1 - 1e-9)
+        best_rms[idx[improved]] = rms[improved]
+        best_rotation[idx[improved]] = rotation[idx[improved]]
+        going[idx[~improved]] = False
+        rotation[idx] = kabsch(feet, np.broadcast_to(query, feet.shape))
+    return best_rotation, best_rms

@@ -238,7 +238,7 @@ def query(
     With ``open_curve`` the points are an open curve, a piece of the curve wanted: every entry
     is screened for the arc that best matches it, and the best are fitted by iterated closest
     points (:mod:`linkwright.atlas.partial`); ``error`` is then the RMS distance over the
-    query's RMS radius. Planar atlases only.
+    query's RMS radius (on the sphere its RMS chord from its mean direction).
 
     Parameters
     ----------
@@ -272,8 +272,6 @@ def query(
     if not (tolerance > 0):
         raise AtlasQueryError(f"tolerance: must be positive, got {tolerance}")
     if open_curve:
-        if model.space != "plane":
-            raise AtlasQueryError("open_curve: open curves are matched in the plane only, so far")
         return _open_query(atlas, model, q, top, want, refine, tolerance, budget, progress)
     variants = describe_variants(family, q[None], atlas.spec.harmonics, template)[0]
     dist, ids = atlas.index.search(variants, variants.shape[0], min(want, atlas.count))
@@ -336,11 +334,14 @@ def _open_query(
         QUERY_SAMPLES,
         by_length,
         fit_piece,
+        fit_sphere_pieces,
         resampled,
         screen_pieces,
+        screen_sphere_pieces,
     )
 
     family, template = atlas.family, atlas.spec.mechanism
+    sphere = model.space == "sphere"
     most = int(cost.OPEN_SCREEN.value)
     if atlas.count > most:
         raise AtlasQueryError(
@@ -350,23 +351,51 @@ def _open_query(
         )
     piece = resampled(q, QUERY_SAMPLES)
     score = np.full(atlas.count, np.inf)
+    # Where each entry's best arc is laid: a similarity w, t (complex) in the plane, a rotation
+    # about the centre on the sphere.
     ws = np.full(atlas.count, np.nan + 0j)
     ts = np.full(atlas.count, np.nan + 0j)
-    for start in range(0, atlas.count, SCREEN_CHUNK):
+    turns = np.full((atlas.count, 3, 3), np.nan) if sphere else None
+    # The sphere's screen holds nine correlations of every curve at once: fewer at a time.
+    chunk = SCREEN_CHUNK // 4 if sphere else SCREEN_CHUNK
+    for start in range(0, atlas.count, chunk):
         cost.check_time()
-        ids = np.arange(start, min(start + SCREEN_CHUNK, atlas.count))
+        ids = np.arange(start, min(start + chunk, atlas.count))
         traced = curves(family, atlas.designs(ids), 2 * SCREEN_SAMPLES, template)
-        score[ids], ws[ids], ts[ids] = screen_pieces(by_length(traced, SCREEN_SAMPLES), piece)
+        arcs = by_length(traced, SCREEN_SAMPLES)
+        if turns is not None:
+            score[ids], turns[ids] = screen_sphere_pieces(arcs, piece)
+        else:
+            score[ids], ws[ids], ts[ids] = screen_pieces(arcs, piece)
         if progress:
-            progress(0.5 * min(1.0, (start + SCREEN_CHUNK) / atlas.count))
+            progress(0.5 * min(1.0, (start + chunk) / atlas.count))
+
+    def fitted_pieces(
+        curves: Array, points: Array, entries: Array, hows: list[Any] | None
+    ) -> list[tuple[Any, float]]:
+        """[(how each is laid, RMS distance)] of curves fitted to ``points``, from ``hows`` (or
+        from the screen's placements of ``entries``)."""
+        if turns is not None:
+            start = turns[entries] if hows is None else np.array(hows)
+            found, distances = fit_sphere_pieces(curves, points, start)
+            return [(f, float(d)) for f, d in zip(found, distances, strict=True)]
+        out: list[tuple[Any, float]] = []
+        for k, i in enumerate(entries):
+            w, t = (complex(ws[i]), complex(ts[i])) if hows is None else hows[k]
+            w, t, gap = fit_piece(curves[k], points, w, t)
+            out.append(((w, t), gap))
+        return out
+
+    def laid(curve: Array, how: Any) -> Array:
+        return curve @ how.T if turns is not None else _carried(curve, *how)
+
     # A short piece is ambiguous, and the screen's arcs and starts are quantised: many entries
     # go on to a quick fit (a coarse curve, the query thinned), the best of them to a fine one.
     shortlist = np.argsort(score, kind="stable")[: min(OPEN_SHORTLIST, atlas.count)]
     shortlist = shortlist[np.isfinite(score[shortlist])]
     coarse = curves(family, atlas.designs(shortlist), OPEN_COARSE, template)
-    first = [fit_piece(coarse[k], piece, complex(ws[i]), complex(ts[i]))
-             for k, i in enumerate(shortlist)]  # fmt: skip
-    keep = np.argsort([f[2] for f in first], kind="stable")[: max(want // 2, top)]
+    first = fitted_pieces(coarse, piece, shortlist, None)
+    keep = np.argsort([f[1] for f in first], kind="stable")[: max(want // 2, top)]
     chosen = shortlist[keep]
     designs = atlas.designs(chosen)
     dense = curves(family, designs, DISTANCE_SAMPLES, template)
@@ -374,17 +403,23 @@ def _open_query(
     # Fitted on the query resampled (its cost is points × curve samples a round), then measured
     # on every point.
     fit_points = resampled(q, min(len(q), 2 * QUERY_SAMPLES))
-    fitted = [fit_piece(dense[k], fit_points, first[j][0], first[j][1])
-              for k, j in enumerate(keep)]  # fmt: skip
-    rms = np.array([_distance(q, _carried(dense[k], f[0], f[1])) for k, f in enumerate(fitted)])
+    fitted = fitted_pieces(dense, fit_points, chosen, [first[j][0] for j in keep])
+    rms = np.array([_distance(q, laid(dense[k], f[0])) for k, f in enumerate(fitted)])
     order = np.argsort(np.where(np.isfinite(rms), rms, np.inf), kind="stable")[:top]
-    w = np.array([f[0] for f in fitted])
-    t = np.array([f[1] for f in fitted])
-    fit = Alignment(
-        error=rms / size, rms=rms, scale=np.abs(w), rotation=np.angle(w),
-        translation=np.stack([t.real, t.imag], -1), reversed=np.zeros(len(w), dtype=bool),
-        shift=np.zeros(len(w)),
-    )  # fmt: skip
+    none, zeros = np.zeros(len(fitted), dtype=bool), np.zeros(len(fitted))
+    fit: Alignment | SphereAlignment
+    if turns is not None:
+        fit = SphereAlignment(
+            error=rms / size, rms=rms, rotation=np.array([f[0] for f in fitted]),
+            reversed=none, shift=zeros,
+        )  # fmt: skip
+    else:
+        w = np.array([f[0][0] for f in fitted])
+        t = np.array([f[0][1] for f in fitted])
+        fit = Alignment(
+            error=rms / size, rms=rms, scale=np.abs(w), rotation=np.angle(w),
+            translation=np.stack([t.real, t.imag], -1), reversed=none, shift=zeros,
+        )  # fmt: skip
     matches = []
     for rank, k in enumerate(order):
         if not np.isfinite(rms[k]):

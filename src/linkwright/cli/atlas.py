@@ -175,7 +175,7 @@ def atlas_query(
         bool,
         typer.Option(
             "--open",
-            help="The points are an open curve, a piece of the curve wanted (planar atlases).",
+            help="The points are an open curve, a piece of the curve wanted.",
         ),
     ] = False,
     tolerance: Annotated[

@@ -85,6 +85,8 @@ class MatchRequest(BaseModel):
     points: CurvePoints
     top: int = Field(5, ge=limits.MATCH_TOP.least, le=limits.MATCH_TOP.value, strict=True)
     refine: bool = True
+    open: bool = False
+    """The points are an open curve, a piece of the curve wanted (every entry is screened)."""
 
 
 class _AtlasState:
@@ -234,9 +236,10 @@ def match_prepare(request: Request, space: str = "plane") -> dict[str, Any]:
 
 @router.post("/match")
 def match(body: MatchRequest, request: Request) -> dict[str, Any]:
-    """The atlas four-bars whose coupler curves best match the drawn closed curve, best first,
-    each placed where the curve was drawn: [x, y] points are matched in the plane, [x, y, z]
-    directions on the sphere (against spherical four-bars; curves come back as unit vectors).
+    """The atlas four-bars whose coupler curves best match the drawn closed curve (with
+    ``open``, a piece of one), best first, each placed where the curve was drawn: [x, y]
+    points are matched in the plane, [x, y, z] directions on the sphere (against spherical
+    four-bars; curves come back as unit vectors).
     A refined match fits at most :data:`REFINE_POINTS` of the points, evenly spaced along the
     drawing (``fitted`` says how many)."""
     points, space = drawn_curve(body.points, 8)
@@ -284,7 +287,9 @@ def _curve(points: Array, valid: Any) -> list[list[float] | None]:
 
 
 def _match(body: MatchRequest, atlas: Atlas, points: Array, fitted: Array) -> dict[str, Any]:
-    matches = query(atlas, fitted, top=body.top, refine=body.refine, budget=2.0)
+    matches = query(
+        atlas, fitted, top=body.top, refine=body.refine, budget=2.0, open_curve=body.open
+    )
     size = _size(points)
     candidates = []
     for rank, m in enumerate(matches, start=1):

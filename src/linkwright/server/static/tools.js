@@ -673,6 +673,7 @@
       [3, 5, 8].map((n) => h("option", { value: String(n), text: `${n} candidates` })));
     top.value = "5";
     const refine = h("input", { id: "synth-refine", testid: "synth-refine", type: "checkbox", checked: true });
+    const openCurve = h("input", { id: "synth-open", testid: "synth-open", type: "checkbox" });
     const matchBtn = h("button", { id: "synth-match", testid: "synth-match", type: "button", class: "primary",
       text: "Match", disabled: true });
     const atlasInfo = h("p", { id: "synth-atlas", testid: "synth-atlas", class: "muted small" });
@@ -706,7 +707,9 @@
       targetInfo,
       h("h3", { text: "Four-bar from the atlas" }),
       h("div", { class: "row" }, top,
-        h("label", { class: "check", for: "synth-refine" }, refine, " refine"), matchBtn),
+        h("label", { class: "check", for: "synth-refine" }, refine, " refine"),
+        h("label", { class: "check", for: "synth-open", title: "the target is a piece of the curve wanted" },
+          openCurve, " open"), matchBtn),
       atlasInfo,
       candidates,
       h("h3", { text: "Ellipse → double sliders (paper 004)" }),
@@ -722,11 +725,20 @@
     let trammelSeq = 0;
     let trammelTimer = null;
 
+    let targetSource = "";
+    function showTarget() {
+      const points = target;
+      const open = openCurve.checked;
+      lw.overlay("synth-target", [open ? points : points.concat([points[0]])], { color: "#111827", width: 2,
+        dash: [6, 4], label: "target curve" });
+      targetInfo.textContent = `${points.length} points (${targetSource}); the curve is taken as ${
+        open ? "open, a piece of the curve wanted" : "closed"}.`;
+    }
+
     function setTarget(points, source) {
       target = points;
-      lw.overlay("synth-target", [points.concat([points[0]])], { color: "#111827", width: 2, dash: [6, 4],
-        label: "target curve" });
-      targetInfo.textContent = `${points.length} points (${source}); the curve is taken as closed.`;
+      targetSource = source;
+      showTarget();
       matchBtn.disabled = points.length < 8;
       fitBtn.disabled = points.length < 5 || points[0].length !== 2; // an ellipse is planar
       candidates.replaceChildren();
@@ -821,6 +833,12 @@
       }
     }
 
+    openCurve.addEventListener("change", () => {
+      if (!target) return;
+      showTarget();
+      candidates.replaceChildren();
+    });
+
     matchBtn.addEventListener("click", async () => {
       if (!target) return;
       setState(root, "running");
@@ -831,7 +849,7 @@
       if (!polling) polling = setTimeout(poll, 300);
       try {
         const res = await call("POST", "/api/match", { points: target, top: Number(top.value),
-          refine: refine.checked });
+          refine: refine.checked, open: openCurve.checked });
         showAtlas({ state: "ready", count: res.atlas.count });
         res.candidates.forEach((c) => candidates.append(candidateRow(c)));
         if (!res.candidates.length) candidates.append(h("li", { class: "muted", text: "No candidate found." }));
