@@ -70,7 +70,9 @@ def test_rate_charts_per_second_at_the_input_speed(page: Any, server_url: str) -
         expect(button).to_have_text("per radian")
 
 
-def test_a_link_carries_the_toggles_the_speed_and_the_units(page: Any, server_url: str) -> None:
+def test_a_link_carries_the_toggles_the_speed_the_units_and_the_forces_panel(
+    page: Any, server_url: str
+) -> None:
     page.goto(server_url + "/#crank-rocker")
     page.wait_for_function(f"{SCENES} >= 1")
     page.wait_for_function("document.body.dataset.busy === '0'")
@@ -79,6 +81,8 @@ def test_a_link_carries_the_toggles_the_speed_and_the_units(page: Any, server_ur
     page.dispatch_event("[data-testid='input-rpm']", "change")
     page.click("[data-testid='plot-kind-velocity']")
     page.click("[data-testid='plot-physical']")
+    page.click("[data-testid='forces-open']")
+    page.click("[data-testid='toggle-forces']")
     page.wait_for_function("document.body.dataset.busy === '0'")
     link = page.evaluate("lw.shareLink()")
     # another browser context: nothing of this page's storage reaches it
@@ -91,4 +95,7 @@ def test_a_link_carries_the_toggles_the_speed_and_the_units(page: Any, server_ur
     assert fresh.evaluate("lw.overlays.units().rpm") == 90
     expect(fresh.locator("[data-testid='input-rpm']")).to_have_value("90")
     expect(fresh.locator("[data-testid='plot-physical']")).to_have_text("per second")
+    # the forces panel as it was left: open, its arrows on the drawing
+    expect(fresh.locator("[data-testid='forces-open']")).to_have_attribute("aria-expanded", "true")
+    expect(fresh.locator("[data-testid='toggle-forces']")).to_have_attribute("aria-pressed", "true")
     other.close()

@@ -472,6 +472,18 @@ function fcSetArrows(on) {
   fcRefresh();
 }
 
+/** What a share link carries of the panel: whether it is open and the arrows are on. */
+export function forcesState() {
+  return { open: fcView.open, arrows: fcView.arrows };
+}
+
+/** Show a share link's panel state (anything else in `f` is ignored). */
+export function applyForcesState(f) {
+  if (!f || typeof f !== "object") return;
+  if (typeof f.open === "boolean" && f.open !== fcView.open) fcSetOpen(f.open);
+  if (typeof f.arrows === "boolean" && f.arrows !== fcView.arrows) fcSetArrows(f.arrows);
+}
+
 /** The edit the button makes: every link its suggested mass, through the scene pipeline. */
 async function fcAddMasses() {
   const d = fcCurrent();

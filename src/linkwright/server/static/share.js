@@ -3,7 +3,7 @@
  * A link carries the document (so the assembly mode, which is the document's), the view (the
  * plane's scale and the model point at the drawing's centre, or the sphere's rotation and
  * zoom), the input angle and the circuit shown, the drawing being built, the analysis toggles
- * on the drawing, the input speed and the charts' units: `#s=` then "z." and base64url of deflated
+ * on the drawing, the forces panel (open, arrows), the input speed and the charts' units: `#s=` then "z." and base64url of deflated
  * compact JSON where the browser has CompressionStream("deflate-raw"), else "j." and the JSON
  * itself. The fragment never reaches the server. A link that is damaged, foreign or too long
  * opens the default example with a one-line message, never a blank page.
@@ -19,6 +19,7 @@ import { drawAll, drawing, fromScreenPlane } from "./draw.js";
 import { keyOf, markLoaded, offerAction, readWork, sessionKey, setBaseline } from "./history.js";
 import { restoreSketch } from "./builder.js";
 import { applyOverlayState, overlayState } from "./overlays.js";
+import { applyForcesState, forcesState } from "./forces.js";
 import { renderCharts } from "./charts.js";
 
 const LINK_PREFIX = "#s=";
@@ -35,6 +36,7 @@ export function captureSession() {
   const out = { v: STATE_VERSION, d: clone(state.doc) };
   if (state.sketch) out.k = clone(state.sketch);
   out.o = overlayState();
+  out.f = forcesState();
   if (state.chartsPhysical) out.p = true;
   if (state.exampleName) out.e = state.exampleName;
   if (finite(state.at)) out.a = state.at;
@@ -119,6 +121,7 @@ export async function restoreSession(snap) {
   applyView(snap.w, sketch ? { space: sketch.space === "sphere" ? "sphere" : "plane" } : sc);
   // the analysis on the drawing and the charts' units, where the state carries them
   await applyOverlayState(snap.o);
+  applyForcesState(snap.f);
   if (typeof snap.p === "boolean" && snap.p !== state.chartsPhysical) {
     state.chartsPhysical = snap.p;
     if (state.scene) renderCharts(state.scene);
