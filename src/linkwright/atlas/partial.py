@@ -14,6 +14,12 @@ screened against every entry directly, all at once:
    onto the points (the complex least-squares fit), until the RMS distance stops falling.
 
 The RMS distance from the query's points to the whole placed curve ranks them.
+
+On the sphere the arc is laid on the query by a rotation about the centre instead (no scale, no
+translation): its residual needs the nine sums Σ b aᵀ, each a correlation of the curve with a
+kernel of spikes as before, and the sum of their matrix's signed singular values, found for
+every start at once as the largest root of a quartic (Theobald's). The fit is iterated closest
+points again, each round's rotation Kabsch's, for many entries at once.
 """
 
 from __future__ import annotations
@@ -259,9 +265,10 @@ def screen_sphere_pieces(curves: Array, query: Array) -> tuple[Array, Array]:
             best_index[better] = index[None]
             best_backwards = np.where(better, backwards, best_backwards)
     rotation = np.full((k_count, 3, 3), np.nan)
-    for k in np.flatnonzero(np.isfinite(best)):
-        arc = curves[k, (best_s[k] + best_index[k]) % n]
-        rotation[k] = kabsch(arc, query[::-1] if best_backwards[k] else query)
+    ks = np.flatnonzero(np.isfinite(best))
+    arcs = curves[ks[:, None], (best_s[ks, None] + best_index[ks]) % n]
+    onto = np.where(best_backwards[ks, None, None], query[::-1], query)
+    rotation[ks] = kabsch(arcs, onto)
     return best, rotation
 
 
