@@ -11,7 +11,8 @@ the sum of squared distances, the frame's place and angle are free unless stated
 3. six points on a semicircle at crank angles 30°, 60°, … 180°, link lengths ≤ 50; published
    best ≈ 1.2162;
 4. Kunjur and Krishnamurty's 18 points (J. Appl. Mech. Robotics 4(2), 1997, as reprinted by
-   Cabrera et al. 2002) at crank steps of 20°, where the steps start a design variable
+   Cabrera et al. 2002 and later papers; typed from that literature, not checked here against
+   a copy of either) at crank steps of 20°, where the steps start a design variable
    (``free_start``); the figure beside it is the one issue 28 quotes, 0.0090289, whose linkage
    we could not see to check that it passes all 18 inputs on one circuit. ``--independent N``
    checks our optimum by N local fits of a closed-form model written apart from linkwright
