@@ -32,6 +32,14 @@ from linkwright.engine import cost
 from linkwright.mechanisms import solve
 
 finite = {"allow_nan": False, "allow_infinity": False}
+# A query screens the whole atlas: two pieces a run, the same two every run.
+PIECES = settings(
+    max_examples=2,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
+    phases=[Phase.explicit, Phase.generate],
+)
 
 
 @pytest.fixture(scope="module")
@@ -59,13 +67,7 @@ def _piece(atlas, entry, scale, angle, shift, start, share, backwards):
     return piece, float(np.sqrt(np.mean(np.sum((piece - piece.mean(0)) ** 2, axis=1))))
 
 
-@settings(
-    max_examples=2,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
-    phases=[Phase.explicit, Phase.generate],
-)
+@PIECES
 @given(
     entry=st.integers(0, 9_999),
     scale=st.floats(0.01, 100.0, **finite),
@@ -82,9 +84,14 @@ def test_a_piece_of_an_entry_moved_anywhere_is_matched_truthfully(fourbars, **ca
     # the distance from the piece to the placed linkage's curve, traced by the engine.
     atlas = open_atlas(fourbars)
     piece, size = _piece(atlas, **case)
-    best = query(atlas, piece, top=3, open_curve=True)[0]
+    _assert_truthful(query(atlas, piece, top=3, open_curve=True)[0], piece, size, _polyline_rms)
+
+
+def _assert_truthful(best, piece, size, polyline_rms) -> None:
+    """The distance a match reports is the one from the piece to the placed linkage's curve,
+    traced by the engine, and it is a close match."""
     traced = solve(best.mechanism, np.linspace(0, 2 * np.pi, 4096, endpoint=False), order=0)
-    measured = _polyline_rms(piece, traced.positions["P"])
+    measured = polyline_rms(piece, traced.positions["P"])
     assert best.distance == pytest.approx(measured, abs=1e-3 * size)
     assert measured < 0.05 * size
     assert best.error == pytest.approx(best.distance / size)
@@ -169,13 +176,7 @@ def _sphere_polyline_rms(points: np.ndarray, curve: np.ndarray) -> float:
     return float(np.sqrt(np.mean(d2)))
 
 
-@settings(
-    max_examples=2,
-    deadline=None,
-    derandomize=True,
-    suppress_health_check=[HealthCheck.function_scoped_fixture],
-    phases=[Phase.explicit, Phase.generate],
-)
+@PIECES
 @given(
     entry=st.integers(0, 2_999),
     axis=st.tuples(*[st.floats(-1.0, 1.0, **finite)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1),
@@ -188,27 +189,24 @@ def test_a_piece_of_a_spherical_entry_turned_anywhere_is_matched_truthfully(
     spherical, entry, axis, angle, start, share, backwards
 ):
     atlas = open_atlas(spherical)
+    piece, size = _sphere_piece(atlas, entry, np.array(axis), angle, start, share, backwards)
+    best = query(atlas, piece, top=3, open_curve=True, refine=False)[0]
+    _assert_truthful(best, piece, size, _sphere_polyline_rms)
+
+
+def _sphere_piece(atlas, entry, axis, angle, start, share, backwards):
+    """A piece of an entry's curve turned about the centre, and its size (RMS chord from its
+    mean direction)."""
     local = curves("spherical-fourbar", atlas.designs([entry]), 400)[0]
-    turn = _rotation(np.array(axis), angle)
-    piece = np.roll(local @ turn.T, -start, axis=0)[: int(share * 400)]
+    piece = np.roll(local @ _rotation(axis, angle).T, -start, axis=0)[: int(share * 400)]
     piece = piece[::-1] if backwards else piece
     centre = piece.mean(0) / np.linalg.norm(piece.mean(0))
-    size = float(np.sqrt(np.mean(np.sum((piece - centre) ** 2, axis=1))))
-    best = query(atlas, piece, top=3, open_curve=True, refine=False)[0]
-    traced = solve(best.mechanism, np.linspace(0, 2 * np.pi, 4096, endpoint=False), order=0)
-    measured = _sphere_polyline_rms(piece, traced.positions["P"])
-    # What must always hold: the distance reported is the one to the placed linkage's curve.
-    assert best.distance == pytest.approx(measured, abs=1e-3 * size)
-    assert measured < 0.05 * size
-    assert best.error == pytest.approx(best.distance / size)
+    return piece, float(np.sqrt(np.mean(np.sum((piece - centre) ** 2, axis=1))))
 
 
 def test_a_piece_of_a_spherical_entry_finds_it(spherical):
     atlas = open_atlas(spherical)
-    local = curves("spherical-fourbar", atlas.designs([1419]), 400)[0]
-    piece = (local @ _rotation(np.array([0.3, -0.8, 0.5]), 2.1).T)[40:260]
-    centre = piece.mean(0) / np.linalg.norm(piece.mean(0))
-    size = float(np.sqrt(np.mean(np.sum((piece - centre) ** 2, axis=1))))
+    piece, size = _sphere_piece(atlas, 1419, np.array([0.3, -0.8, 0.5]), 2.1, 40, 0.55, False)
     best = query(atlas, piece, top=3, open_curve=True, refine=False)[0]
     assert best.atlas_id == 1419
     traced = solve(best.mechanism, np.linspace(0, 2 * np.pi, 4096, endpoint=False), order=0)
