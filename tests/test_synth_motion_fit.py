@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 from synth_helpers import FAST, run_cli
 
 from linkwright.io import parse_document
-from linkwright.mechanisms import FourBar, SliderCrank, solve
+from linkwright.mechanisms import DoubleSlider, FourBar, SliderCrank, solve
 from linkwright.synthesis.motion_fit import fit_motion
 from linkwright.synthesis.precision_designs import PrecisionError
 
@@ -39,7 +39,9 @@ def _recomputed(fit, points, angles, weight, spread):
     m = solve(fit.mechanism, fit.inputs, order=0)
     assert m.valid.all()
     dp = np.linalg.norm(m.positions["P"] - points, axis=1)
-    line = m.positions["B"] - m.positions["A"]
+    # The coupler line: A → B, or R → Q on a double slider (MotionFit's documented offset).
+    start, end = ("A", "B") if "A" in m.positions else ("R", "Q")
+    line = m.positions[end] - m.positions[start]
     turned = np.arctan2(line[:, 1], line[:, 0]) + fit.angle_offset
     da = np.abs(np.angle(np.exp(1j * (turned - angles))))
     return dp, da, float(np.sum(dp**2 + (weight * spread * da) ** 2))
@@ -69,6 +71,29 @@ def test_poses_of_a_slider_crank_are_met_by_one():
     assert isinstance(best.mechanism, SliderCrank)
     dp, da, _ = _recomputed(best, points, angles, 1.0, 1.0)
     assert np.max(dp) < 1e-8 and np.max(da) < 1e-8
+
+
+@FAST
+@given(st.integers(0, 2**32 - 1), st.integers(6, 10))
+def test_poses_of_a_double_slider_are_met_by_one(seed, n):
+    """An elliptic trammel's body: two of its points run on lines (two PR dyads), so a double
+    slider meets its poses exactly (as may a slider-crank through its Cardan circle's centre,
+    which runs on a circle about M)."""
+    rng = np.random.default_rng(seed)
+    true = DoubleSlider(
+        M=rng.uniform(-2, 2, 2), alpha=rng.uniform(0.5, 2.6), beta=rng.uniform(-np.pi, np.pi),
+        p=rng.uniform(0.5, 2.0), q=rng.uniform(0.5, 2.0), h=rng.uniform(-1.0, 1.0),
+    )  # fmt: skip
+    m = solve(true, np.sort(rng.uniform(0, 2 * np.pi, n)), order=0)
+    points = m.positions["P"]
+    line = m.positions["Q"] - m.positions["R"]
+    angles = np.arctan2(line[:, 1], line[:, 0]) + rng.uniform(-np.pi, np.pi)
+    spread = _diameter(points)
+    fits = [f for f in fit_motion(points, angles) if isinstance(f.mechanism, DoubleSlider)]
+    assert fits
+    dp, da, error = _recomputed(fits[0], points, angles, 1.0, spread)
+    assert error == pytest.approx(fits[0].error, abs=1e-18 * spread**2, rel=1e-6)
+    assert np.max(dp) < 1e-7 * spread and np.max(da) < 1e-7
 
 
 def test_noisy_poses_are_met_by_a_least_squares_optimum():

@@ -372,8 +372,8 @@ def synth_motion(
         bool,
         typer.Option(
             "--approximate",
-            help="Least squares for any number of poses (the default from 6): the four-bars "
-            "and slider-cranks that come closest, ranked.",
+            help="Least squares for any number of poses (the default from 6): the four-bars, "
+            "slider-cranks and double sliders that come closest, ranked.",
         ),
     ] = False,
     angle_weight: Annotated[
@@ -394,8 +394,8 @@ def synth_motion(
 ) -> None:
     """Motion generation: a four-bar guiding a body through 3, 4 or 5 poses exactly
     (Burmester; four poses without --beta2 print the centre-point and circle-point curves as
-    CSV), or, from 6 poses or with --approximate, the four-bars and slider-cranks that come
-    closest to them (least squares over poses)."""
+    CSV), or, from 6 poses or with --approximate, the four-bars, slider-cranks and double
+    sliders that come closest to them (least squares over poses)."""
     import numpy as np
 
     from linkwright.cli.synth_motion_fit import MAX_POSES, approximate_report, approximate_text

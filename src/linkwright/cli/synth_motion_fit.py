@@ -1,5 +1,6 @@
-"""``linkwright synth motion`` beyond exact Burmester: the four-bars and slider-cranks that come
-closest to n ≥ 3 poses (:func:`linkwright.synthesis.motion_fit.fit_motion`), as a report."""
+"""``linkwright synth motion`` beyond exact Burmester: the four-bars, slider-cranks and double
+sliders that come closest to n ≥ 3 poses (:func:`linkwright.synthesis.motion_fit.fit_motion`),
+as a report."""
 
 from __future__ import annotations
 

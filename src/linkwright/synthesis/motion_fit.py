@@ -12,7 +12,8 @@ method is the classical one of fitting dyads (Sandor and Erdman, *Advanced Mecha
    the body points where it is least are found by a grid over the poses' neighbourhood, then
    refined by least squares in the geometric distances (point, centre and radius together).
 2. **Linkages.** Every pair of distinct good dyads makes a linkage: two RR dyads a four-bar
-   (the first the crank), an RR and a PR dyad a slider-crank.
+   (the first the crank), an RR and a PR dyad a slider-crank, two PR dyads a double slider
+   (an elliptic trammel, paper 004's, driven by the body's own angle).
 3. **The pose error, simulated.** Each linkage is solved by the engine on the assembly of the
    first pose, its input at each pose chosen to bring the body nearest to it; the error is
    Σ_i |ΔP_i|² + (w·s)² Δα_i², ΔP the pose point's miss, Δα the body angle's, s the poses'
@@ -31,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.analysis.extrema import golden_max
-from linkwright.mechanisms import FourBar, Mechanism, SliderCrank, solve
+from linkwright.mechanisms import DoubleSlider, FourBar, Mechanism, SliderCrank, solve
 from linkwright.synthesis.precision_designs import PrecisionError, pose_set
 
 __all__ = ["FittedDyad", "MotionFit", "fit_dyads", "fit_motion"]
@@ -69,14 +70,15 @@ class FittedDyad:
 class MotionFit:
     """A linkage guiding the body near the poses.
 
-    ``mechanism`` is a :class:`FourBar` or a :class:`SliderCrank` (P the pose point);
+    ``mechanism`` is a :class:`FourBar`, a :class:`SliderCrank` or a :class:`DoubleSlider`
+    (P the pose point);
     ``inputs`` the input at each pose; ``position_error`` and ``angle_error`` each pose's miss
     (length, radians) simulated by the engine on the first pose's assembly; ``error`` the
     weighted sum of squares it is ranked by; ``branch_defect`` whether the poses lie on both
     branches (then the linkage cannot pass them in one motion, whatever the errors say);
     ``dyads`` the two fitted dyads it is made of; ``angle_offset`` the body's angle less the
-    coupler line's (A → B), so that the body's angle at pose i is that line's angle there plus
-    it.
+    coupler line's (A → B; R → Q on a double slider), so that the body's angle at pose i is
+    that line's angle there plus it.
     """
 
     mechanism: Mechanism
@@ -245,7 +247,8 @@ def _refine(
 def fit_motion(
     points: ArrayLike, angles: ArrayLike, *, angle_weight: float = 1.0, top: int = 10
 ) -> list[MotionFit]:
-    """The four-bars and slider-cranks that best guide a body near n ≥ 3 poses, ranked.
+    """The four-bars, slider-cranks and double sliders that best guide a body near n ≥ 3 poses,
+    ranked.
 
     Parameters
     ----------
@@ -283,6 +286,8 @@ def fit_motion(
     rr = [d for d in dyads if d.kind == "RR"]
     pr = [d for d in dyads if d.kind == "PR"]
     pairs = [(x, y) for x in rr for y in rr if x is not y] + [(x, y) for x in rr for y in pr]
+    # Two sliders make one double slider whichever is named first.
+    pairs += [(x, y) for i, x in enumerate(pr) for y in pr[i + 1 :]]
     fits = [f for f in (_linkage(p, a, s, x, y, angle_weight) for x, y in pairs) if f]
     fits.sort(key=lambda f: (f.branch_defect, f.error))
     # The best few finish together: every dimension and every pose's input at once, in least
@@ -304,6 +309,14 @@ def _numbers(mech: Mechanism) -> tuple[Array, Any]:
                            rocker=math.exp(y[6]), u=y[7], v=y[8], assembly=asm)  # fmt: skip
 
         return x, four_bar
+    if isinstance(mech, DoubleSlider):
+        x = np.r_[mech.M, float(mech.alpha), float(mech.beta), float(mech.p), float(mech.q),
+                  float(mech.h)]  # fmt: skip
+
+        def double_slider(y: Array) -> Mechanism:
+            return DoubleSlider(M=y[0:2], alpha=y[2], beta=y[3], p=y[4], q=y[5], h=y[6])
+
+        return x, double_slider
     assert isinstance(mech, SliderCrank)
     angle = float(mech.line_angle)
     normal = np.array([-math.sin(angle), math.cos(angle)])
@@ -369,6 +382,8 @@ def _linkage(
     p: Array, a: Array, s: float, first: FittedDyad, second: FittedDyad, weight: float
 ) -> MotionFit | None:
     """The linkage of two dyads, simulated at every pose (None where it cannot be built)."""
+    if first.kind == second.kind == "PR":
+        return _double_slider(p, a, s, first, second, weight)
     A, B = first.point, second.point
     coupler = float(np.linalg.norm(B - A))
     if coupler < 1e-6 * s or np.linalg.norm(first.centre - (second.centre)) < 1e-6 * s:
@@ -402,6 +417,22 @@ def _linkage(
         sides = np.sign((moved_b - moved_a) @ guide)
 
     delta = float(a[0] - base)
+    return _simulated(mech, delta, p, a, s, weight, natural, (first, second), sides)
+
+
+def _simulated(
+    mech: Mechanism,
+    delta: float,
+    p: Array,
+    a: Array,
+    s: float,
+    weight: float,
+    natural: Array,
+    dyads: tuple[FittedDyad, FittedDyad],
+    sides: Array,
+) -> MotionFit | None:
+    """``mech`` solved at the input nearest each pose (near ``natural``): its fit, or None
+    where it cannot reach one. ``sides``: the branch each pose asks for."""
     inputs = _nearest_inputs(mech, delta, p, a, s, weight, natural)
     dp, da = _misses(mech, delta, p, a, inputs)
     if not np.all(np.isfinite(dp)):
@@ -413,13 +444,45 @@ def _linkage(
         angle_error=da,
         error=float(np.sum(dp * dp + (weight * s * da) ** 2)),
         branch_defect=bool(np.any(sides != sides[0])),
-        dyads=(first, second),
+        dyads=dyads,
         angle_offset=delta,
     )
 
 
+def _double_slider(
+    p: Array, a: Array, s: float, first: FittedDyad, second: FittedDyad, weight: float
+) -> MotionFit | None:
+    """Two PR dyads: the body's points R and Q slide on two fixed lines, an elliptic trammel
+    (:class:`DoubleSlider`, paper 004) driven by the body's own angle. Its guides are the
+    dyads' lines, met at M; its coupler is R − Q = (p + q)·e^{iθ} in the first pose, and the
+    pose point P = R − (p + i·h)·e^{iθ} there."""
+    alpha = first.angle - second.angle
+    if abs(math.sin(alpha)) < 1e-6:
+        return None  # parallel guides: no trammel
+    e1 = np.array([math.cos(first.angle), math.sin(first.angle)])
+    e2 = np.array([math.cos(second.angle), math.sin(second.angle)])
+    # M = c1 + t1·e1 = c2 + t2·e2.
+    t1 = np.linalg.solve(np.c_[e1, -e2], second.centre - first.centre)[0]
+    M = first.centre + t1 * e1
+    R, Q = first.point, second.point
+    rod = complex(*(R - Q))
+    if abs(rod) < 1e-6 * s:
+        return None
+    theta0 = math.atan2(rod.imag, rod.real)
+    arm = complex(*(R - p[0])) * complex(math.cos(theta0), -math.sin(theta0))
+    mech = DoubleSlider(M=M, alpha=alpha, beta=second.angle, p=arm.real, q=abs(rod) - arm.real,
+                        h=arm.imag)  # fmt: skip
+    # The body line R → Q runs at θ + π; the input is the body's angle, less its offset.
+    delta = float(a[0] - (theta0 + math.pi))
+    natural = theta0 + (a - a[0])
+    return _simulated(mech, delta, p, a, s, weight, natural, (first, second), np.ones(len(p)))
+
+
 def _body_angle(motion: Any) -> Array:
-    line = np.asarray(motion.positions["B"]) - np.asarray(motion.positions["A"])
+    """The angle of the coupler line the body's angle is offset from: A → B (four-bar,
+    slider-crank), R → Q (double slider, which has no A)."""
+    ends = ("A", "B") if "A" in motion.positions else ("R", "Q")
+    line = np.asarray(motion.positions[ends[1]]) - np.asarray(motion.positions[ends[0]])
     return np.asarray(np.arctan2(line[..., 1], line[..., 0]))
 
 
