@@ -115,7 +115,11 @@ def kunjur_krishnamurty_multistart(starts: int, seed: int) -> tuple[float, int]:
     targets = np.array(KUNJUR_KRISHNAMURTY)
     steps = np.radians(20.0) * np.arange(len(targets))
 
-    def traced(z: np.ndarray, side: float) -> tuple[np.ndarray, np.ndarray]:
+    def left(v: np.ndarray) -> np.ndarray:
+        return np.stack([-v[:, 1], v[:, 0]], 1)
+
+    def coupler_points(z: np.ndarray, side: float) -> tuple[np.ndarray, np.ndarray]:
+        """The coupler point at the 18 inputs, and how far each input is from assembling."""
         x, y, frame_angle, frame, crank, coupler, rocker, u, v, start = z
         a0 = np.array([x, y])
         b0 = a0 + frame * np.array([np.cos(frame_angle), np.sin(frame_angle)])
@@ -126,20 +130,9 @@ def kunjur_krishnamurty_multistart(starts: int, seed: int) -> tuple[float, int]:
         along = (coupler**2 - rocker**2 + dist**2) / (2 * dist)
         height2 = coupler**2 - along**2
         e = d / dist[:, None]
-        b = (
-            a
-            + along[:, None] * e
-            + side
-            * np.sqrt(np.maximum(height2, 0))[:, None]
-            * e
-            @ [
-                [0, 1],
-                [-1, 0],
-            ]
-        )
+        b = a + along[:, None] * e + side * np.sqrt(np.maximum(height2, 0))[:, None] * left(e)
         line = (b - a) / coupler
-        p = a + u * line + v * line @ [[0, 1], [-1, 0]]
-        return p, np.maximum(-height2, 0.0)
+        return a + u * line + v * left(line), np.maximum(-height2, 0.0)
 
     rng = np.random.default_rng(seed)
     lo = np.r_[-10, -10, -np.inf, [0.01] * 4, -10, -10, -np.inf]
@@ -153,11 +146,11 @@ def kunjur_krishnamurty_multistart(starts: int, seed: int) -> tuple[float, int]:
         ]  # fmt: skip
 
         def misses(z: np.ndarray, side: float = side) -> np.ndarray:
-            p, unreached = traced(z, side)
+            p, unreached = coupler_points(z, side)
             return np.concatenate([(p - targets).ravel(), 10 * unreached])
 
         z = least_squares(misses, z0, bounds=(lo, hi), max_nfev=400).x
-        p, unreached = traced(z, side)
+        p, unreached = coupler_points(z, side)
         lengths = sorted(z[3:7])
         crank_rocker = z[4] == lengths[0] and lengths[0] + lengths[3] <= lengths[1] + lengths[2]
         if unreached.max() == 0 and crank_rocker:

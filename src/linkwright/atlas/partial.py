@@ -27,6 +27,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from linkwright.geometry.sphere import best_rotation
+
 __all__ = [
     "by_length",
     "fit_piece",
@@ -190,7 +192,9 @@ def _nuclear_traces(h: Array) -> Array:
     Newton's method from the upper bound √(3p) descends to it monotonically (the quartic's
     roots are all real, so it is convex beyond the largest); where two roots meet (a rank-
     deficient h) it still closes to about √ε of the scale, unlike the trigonometric roots of
-    M's characteristic cubic, whose square roots lose half the digits of the smallest.
+    M's characteristic cubic, whose square roots lose half the digits of the smallest. (An SVD
+    of each, :func:`~linkwright.geometry.sphere.best_rotation`, is exact but far slower for the
+    screen's millions.)
     """
     m = np.einsum("...ki,...kj->...ij", h, h)
     p = np.trace(m, axis1=-2, axis2=-1)
@@ -213,12 +217,8 @@ def _nuclear_traces(h: Array) -> Array:
 
 def kabsch(points: Array, onto: Array) -> Array:
     """The rotations R (..., 3, 3), det +1, that best lay ``points`` (..., m, 3) on ``onto``
-    (..., m, 3): least Σ |R·p − q|² (Kabsch's construction from the SVD of Σ q pᵀ)."""
-    u, _, vt = np.linalg.svd(np.swapaxes(onto, -1, -2) @ points)
-    d = np.where(np.linalg.det(u @ vt) < 0, -1.0, 1.0)
-    u = u * np.stack([np.ones_like(d), np.ones_like(d), d], -1)[..., None, :]
-    out: Array = u @ vt
-    return out
+    (..., m, 3): least Σ |R·p − q|² (:func:`linkwright.geometry.sphere.best_rotation`)."""
+    return best_rotation(np.swapaxes(points, -1, -2) @ onto)[1]
 
 
 def screen_sphere_pieces(curves: Array, query: Array) -> tuple[Array, Array]:

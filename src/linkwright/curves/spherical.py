@@ -83,6 +83,7 @@ from linkwright.curves.fourier import (
     start_fraction,
 )
 from linkwright.engine.kernels import available, compiled
+from linkwright.geometry.sphere import best_rotation
 
 __all__ = [
     "SphereAlignment",
@@ -528,20 +529,6 @@ class SphereAlignment:
     shift: Array
 
 
-def _kabsch(h: Array) -> tuple[Array, Array]:
-    """max over proper rotations R of tr(R·h) (…,) and the R (…, 3, 3) that reaches it; NaN
-    where h is not finite."""
-    ok = np.asarray(np.isfinite(h).all(axis=(-2, -1)))
-    u, sigma, vt = np.linalg.svd(np.where(ok[..., None, None], h, 0.0))
-    # R = V·diag(1, 1, d)·Uᵀ with d = det(V·Uᵀ) = ±1: the best proper rotation (Kabsch).
-    d = np.where(np.linalg.det(u) * np.linalg.det(vt) < 0, -1.0, 1.0)
-    v = np.swapaxes(vt, -1, -2).copy()
-    v[..., 2] *= d[..., None]
-    value = sigma[..., 0] + sigma[..., 1] + d * sigma[..., 2]
-    r = v @ np.swapaxes(u, -1, -2)
-    return np.where(ok, value, np.nan), np.where(ok[..., None, None], r, np.nan)
-
-
 def sphere_align(curve: ArrayLike, target: ArrayLike, *, samples: int = 256) -> SphereAlignment:
     """The best rotation of the sphere (proper), start point and direction taking the closed
     curve ``curve`` (…, N, 3) onto ``target`` (…, N′, 3), both resampled at ``samples`` points
@@ -591,16 +578,16 @@ def sphere_align(curve: ArrayLike, target: ArrayLike, *, samples: int = 256) -> 
         spectrum = spectrum.reshape(spectrum.shape[:-3] + (9, samples))
         whole_h = np.fft.ifft(spectrum, axis=-1).real  # (…, 9, M)
         whole_h = np.moveaxis(whole_h, -1, -2).reshape(whole_h.shape[:-2] + (samples, 3, 3))
-        whole = np.argmax(_kabsch(whole_h)[0], axis=-1).astype(float)
+        whole = np.argmax(best_rotation(whole_h)[0], axis=-1).astype(float)
 
         def evaluate(s: Array, spectrum: Complex = spectrum) -> tuple[Array, Array]:
             h, dh = circular_correlation(spectrum, s)
-            value, r = _kabsch(h.real.reshape(h.shape[:-1] + (3, 3)))
+            value, r = best_rotation(h.real.reshape(h.shape[:-1] + (3, 3)))
             return value, np.einsum("...ij,...ji->...", r, dh.real.reshape(r.shape))
 
         s = refine_shift(evaluate, whole)
         h = circular_correlation(spectrum, s)[0].real
-        value, r = _kabsch(h.reshape(h.shape[:-1] + (3, 3)))
+        value, r = best_rotation(h.reshape(h.shape[:-1] + (3, 3)))
         fits.append((value, r, s))
     (v_f, r_f, s_f), (v_b, r_b, s_b) = fits
     backwards = v_b > v_f  # NaN compares False: a NaN curve stays "forwards"

@@ -23,6 +23,7 @@ __all__ = [
     "SphereMeet",
     "angle_at",
     "arc",
+    "best_rotation",
     "circle_frame",
     "circle_point",
     "clear_centre",
@@ -499,3 +500,27 @@ def clear_centre(preferred: ArrayLike, points: ArrayLike) -> Array:
             if gap > best_gap:
                 best, best_gap = trial, gap
     return best
+
+
+def best_rotation(h: Array) -> tuple[Array, Array]:
+    """max over proper rotations R of tr(R·h) (…,) and the R (…, 3, 3) that reaches it, for 3 × 3
+    matrices h (…, 3, 3); NaN where h is not finite.
+
+    With h = Σ p qᵀ over paired points, R is the rotation laying the p on the q best (least
+    Σ |R·p − q|², Wahba's problem): with h = U Σ Vᵀ, R = V·diag(1, 1, d)·Uᵀ, d = det(V·Uᵀ), and
+    the value is σ1 + σ2 + d·σ3 (Kabsch).
+
+    >>> turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    >>> p = np.eye(3)
+    >>> value, r = best_rotation(p.T @ (p @ turn.T))
+    >>> float(value), bool(np.allclose(r, turn))
+    (3.0, True)
+    """
+    ok = np.asarray(np.isfinite(h).all(axis=(-2, -1)))
+    u, sigma, vt = np.linalg.svd(np.where(ok[..., None, None], h, 0.0))
+    d = np.where(np.linalg.det(u) * np.linalg.det(vt) < 0, -1.0, 1.0)
+    v = np.swapaxes(vt, -1, -2).copy()
+    v[..., 2] *= d[..., None]
+    value = sigma[..., 0] + sigma[..., 1] + d * sigma[..., 2]
+    r = v @ np.swapaxes(u, -1, -2)
+    return np.where(ok, value, np.nan), np.where(ok[..., None, None], r, np.nan)

@@ -50,8 +50,7 @@ def paired_fit(points: Array, targets: Array) -> tuple[complex, complex, float]:
 
 def paired_turn(points: Array, targets: Array) -> tuple[Array, float]:
     """The rotation (Kabsch) of ``points`` onto ``targets``, pair by pair, and its residual."""
-    u, _, vt = np.linalg.svd(targets.T @ points)
-    R = u @ np.diag([1.0, 1.0, np.sign(np.linalg.det(u @ vt))]) @ vt
+    R = sphere.best_rotation(points.T @ targets)[1]
     return R, float(np.sum((points @ R.T - targets) ** 2))
 
 
@@ -80,9 +79,7 @@ def nearest_turn(curve: Array, targets: Array, R: Array, rounds: int = 12) -> tu
     for _ in range(rounds):
         moved = curve @ R.T
         near = curve[np.argmin(np.sum((moved[None] - targets[:, None]) ** 2, axis=-1), axis=1)]
-        u, _, vt = np.linalg.svd(targets.T @ near)
-        d = np.sign(np.linalg.det(u @ vt))
-        R = u @ np.diag([1.0, 1.0, d]) @ vt
+        R = sphere.best_rotation(near.T @ targets)[1]
     moved = curve @ R.T
     return R, float(np.sum(np.min(np.sum((moved[None] - targets[:, None]) ** 2, axis=-1), axis=1)))
 
