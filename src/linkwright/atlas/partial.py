@@ -217,7 +217,7 @@ def _nuclear_traces(h: Array) -> Array:
 
 def kabsch(points: Array, onto: Array) -> Array:
     """The rotations R (..., 3, 3), det +1, that best lay ``points`` (..., m, 3) on ``onto``
-    (..., m, 3): least Σ |R·p − q|² (:func:`linkwright.geometry.sphere.best_rotation`)."""
+    (..., m, 3): least ``Σ |R·p − q|²`` (:func:`linkwright.geometry.sphere.best_rotation`)."""
     return best_rotation(np.swapaxes(points, -1, -2) @ onto)[1]
 
 

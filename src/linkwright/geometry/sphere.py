@@ -507,7 +507,7 @@ def best_rotation(h: Array) -> tuple[Array, Array]:
     matrices h (…, 3, 3); NaN where h is not finite.
 
     With h = Σ p qᵀ over paired points, R is the rotation laying the p on the q best (least
-    Σ |R·p − q|², Wahba's problem): with h = U Σ Vᵀ, R = V·diag(1, 1, d)·Uᵀ, d = det(V·Uᵀ), and
+    ``Σ |R·p − q|²``, Wahba's problem): with h = U Σ Vᵀ, R = V·diag(1, 1, d)·Uᵀ, d = det(V·Uᵀ), and
     the value is σ1 + σ2 + d·σ3 (Kabsch).
 
     >>> turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
