@@ -35,12 +35,12 @@ CASES = [
     ("watt2", None, 24),
     ("stephenson1", None, 24),
     ("stephenson3", None, 24),
-    ("stephenson3", "stephenson3-output", 4),
+    ("stephenson3", "stephenson3-output", 2),
     ("linkage", "jansen-leg", 24),
     ("linkage", "paper000-fig6-linkage", 24),
     ("spherical-sixbar", None, 24),
     ("spherical-stephenson3", None, 24),
-    ("spherical-stephenson3", "paper001-fg", 4),
+    ("spherical-stephenson3", "paper001-fg", 2),
 ]
 
 

@@ -1,8 +1,9 @@
-"""Exact extrema of a quantity along a circuit: dense bracketing, then golden-section refinement.
+"""Exact extrema of a quantity along a circuit: dense bracketing, then refinement by sections.
 
-A sampled maximum is off by O(h²) of the curvature; refining each bracket by golden section to
-the last bits makes the maxima of paper 003's coefficients exact to ~1e-12 rather than to the
-grid (the paper's own spherical values were evidently read off a 10° grid: see SEED-NOTES.md).
+A sampled maximum is off by O(h²) of the curvature; refining each bracket (by sections, or by
+golden section where the quantity takes one point at a time) to the last bits makes the maxima
+of paper 003's coefficients exact to ~1e-12 rather than to the grid (the paper's own spherical
+values were evidently read off a 10° grid: see SEED-NOTES.md).
 """
 
 from __future__ import annotations
@@ -15,13 +16,15 @@ from numpy.typing import NDArray
 from linkwright.engine import Motion, evaluate
 from linkwright.mechanisms.base import Mechanism, circuit
 
-__all__ = ["CIRCUIT_SAMPLES", "circuit_extremum", "golden_max"]
+__all__ = ["CIRCUIT_SAMPLES", "circuit_extremum", "golden_max", "section_max"]
 
 Array = NDArray[np.float64]
 INV_PHI = (np.sqrt(5.0) - 1.0) / 2.0
 GOLDEN_STEPS = 90
 # Samples of the circuit that brackets every extremum before it is refined.
 CIRCUIT_SAMPLES = 1024
+SECTION_POINTS = 15
+SECTION_ROUNDS = 22
 
 
 def golden_max(
@@ -57,6 +60,47 @@ def golden_max(
     x = 0.5 * (lo + hi)
     candidates = np.stack((x, a, b))
     values = np.stack((f(x), f(a), f(b)))
+    values = np.where(np.isfinite(values), values, -np.inf)
+    best = np.argmax(values, axis=0)
+    return (
+        np.take_along_axis(candidates, best[None], 0)[0],
+        np.take_along_axis(values, best[None], 0)[0],
+    )
+
+
+def section_max(
+    f: Callable[[Array], Array],
+    a: Array,
+    b: Array,
+    points: int = SECTION_POINTS,
+    rounds: int = SECTION_ROUNDS,
+) -> tuple[Array, Array]:
+    """Maximise unimodal ``f`` on each bracket [a, b] (batched) by sections; returns (argmax,
+    max), as :func:`golden_max` does.
+
+    Each round evaluates ``points`` evenly spaced interior points in one call of ``f`` (on a
+    new leading axis, which ``f`` must broadcast) and keeps the two intervals beside the best,
+    so a bracket shrinks by 2/(points + 1) a round: 22 rounds of 15 points shrink it to 1e-20
+    of its width, below the spacing of doubles as golden section's 90 steps do, in 22 calls
+    rather than 92. Where each call is dear for its overhead (a plan evaluated a few samples
+    at a time) that is several times faster. The end points are candidates too.
+
+    >>> x, fx = section_max(lambda t: -(t - 0.3) ** 2, np.array([0.0]), np.array([1.0]))
+    >>> float(np.round(x[0], 12)), float(fx[0])
+    (0.3, -0.0)
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    lo, hi = a.copy(), b.copy()
+    share = (np.arange(1, points + 1) / (points + 1)).reshape((points,) + (1,) * lo.ndim)
+    for _ in range(rounds):
+        width = hi - lo
+        values = f(lo + share * width)
+        best = np.argmax(np.where(np.isfinite(values), values, -np.inf), axis=0)
+        lo, hi = lo + best / (points + 1) * width, lo + (best + 2) / (points + 1) * width
+    x = 0.5 * (lo + hi)
+    candidates = np.stack((x, a, b))
+    values = f(candidates)
     values = np.where(np.isfinite(values), values, -np.inf)
     best = np.argmax(values, axis=0)
     return (
@@ -103,7 +147,7 @@ def circuit_extremum(
     best_x, best_v, best_b = t_mid, np.take_along_axis(values, i, -1)[..., 0], b_mid
     # The maximum lies between the neighbouring samples; each half-bracket lies on one branch
     # (a branch change happens only at a limit, which is itself a sample), so refine both
-    # halves, together: a leading axis of two, one evaluation per golden step for both.
+    # halves, together: a leading axis of two, one evaluation per round for both.
     t_nb, b_nb = (np.stack(pair) for pair in zip(at(i - 1), at(i + 1), strict=True))
     # Across the seam of a full turn (last sample → sample 0) the neighbour is 2π away in
     # value but one step away in motion: take it continuously.
@@ -114,7 +158,7 @@ def circuit_extremum(
         m = evaluate(plan, params, x[..., None], points=points, branches={dyad: b_use[..., None]})
         return (sign * quantity(m))[..., 0]
 
-    x, v = golden_max(f, np.minimum(t_mid, t_nb), np.maximum(t_mid, t_nb))
+    x, v = section_max(f, np.minimum(t_mid, t_nb), np.maximum(t_mid, t_nb))
     for side in range(2):
         better = v[side] > best_v
         best_x = np.where(better, x[side], best_x)

@@ -303,7 +303,8 @@ def fit_sphere_pieces(curves: Array, query: Array, rotations: Array) -> tuple[Ar
         # In each curve's own frame: the query turned back by its rotation. The nearest sample
         # is the one of largest dot product (unit vectors); the foot is on a segment beside it.
         back = query[None] @ rotation[idx]  # (k, m, 3)
-        near = np.argmax(np.einsum("kmc,knc->kmn", back, own), axis=-1)
+        # A batched matrix product (BLAS), several times faster than einsum with c = 3.
+        near = np.argmax(back @ own.transpose(0, 2, 1), axis=-1)
         gap = np.full(near.shape, np.inf)
         feet = np.zeros(back.shape)
         for first in (near - 1, near):
