@@ -1,9 +1,9 @@
 """One bundled example per family, the composed linkage once in the plane and once on the sphere.
 
 The picture, diagram, animation and CLI tests all run over these, and the README's gallery shows
-them (its file names are these keys). :data:`INPUT_EXAMPLES` adds the two linkages driven so
-that a triad remains; tests/test_family_verbs.py runs every verb on them and compares their
-gallery pictures.
+them (its file names are these keys). :data:`INPUT_EXAMPLES` adds the linkages driven elsewhere
+than at a crank (so that a triad remains, or at a moving hinge); tests/test_family_verbs.py runs
+every verb on them and compares their gallery pictures.
 """
 
 from linkwright.server.scene import FAMILY_EXAMPLES as WORKBENCH_EXAMPLES
@@ -20,12 +20,16 @@ INPUT_EXAMPLES = {
     "stephenson3-output": "stephenson3-output",
     "spherical-stephenson3-fg": "paper001-fg",
     "linkage-hinge": "hinge-driven-fourbar",
+    "stephenson3-hinge": "stephenson3-driven-at-d",
+    "spherical-stephenson3-hinge": "paper001-driven-at-e",
 }
 
 _FAMILY_OF_INPUT = {
     "stephenson3-output": "stephenson3",
     "spherical-stephenson3-fg": "spherical-stephenson3",
     "linkage-hinge": "linkage",
+    "stephenson3-hinge": "stephenson3",
+    "spherical-stephenson3-hinge": "spherical-stephenson3",
 }
 
 

@@ -183,7 +183,12 @@ SIXBAR_ERRORS = [
     ("stephenson1", "mechanism.link1", 0, "mechanism.link1: must be a positive number, got 0"),
     ("stephenson1", "mechanism.assembly2", 3, "mechanism.assembly2: must be 1 or -1, got 3"),
     ("stephenson3", "mechanism.input", "coupler", "mechanism.input: unknown value 'coupler'"),
-    ("stephenson3", "mechanism.input", 1, 'mechanism.input: must be "crank" or "output", got 1'),
+    (
+        "stephenson3",
+        "mechanism.input",
+        1,
+        'mechanism.input: must be one of "crank", "output", "rocker", "A", "B", "C" or "D", got 1',
+    ),
     ("watt2", "mechanism.input", "crank", "mechanism: unknown field 'input'"),
     ("stephenson3", "mechanism.B0", [0, 0], "mechanism.B0: coincides with mechanism.A0"),
 ]

@@ -169,8 +169,18 @@ FAMILY_ERRORS = [
     (STEPHENSON, "mechanism.a6", -1, f"mechanism.a6: {ARC} -1"),
     (STEPHENSON, "mechanism.a5", 30, "mechanism: unknown field 'a5'"),
     (STEPHENSON, "mechanism.sigma", math.inf, "mechanism.sigma: must be a finite number, got inf"),
-    (STEPHENSON, "mechanism.input", "CD", "mechanism.input: unknown value 'CD' (known: AB, FG)"),
-    (STEPHENSON, "mechanism.input", 1, 'mechanism.input: must be "AB" or "FG", got 1'),
+    (
+        STEPHENSON,
+        "mechanism.input",
+        "output",
+        "mechanism.input: unknown value 'output' (known: AB, FG, DC, B, C, E, F)",
+    ),
+    (
+        STEPHENSON,
+        "mechanism.input",
+        1,
+        'mechanism.input: must be one of "AB", "FG", "DC", "B", "C", "E" or "F", got 1',
+    ),
     (STEPHENSON, "mechanism.input", "crank", "mechanism.input: unknown value 'crank'"),
 ]
 

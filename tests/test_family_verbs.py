@@ -66,6 +66,10 @@ ROW_NAMES = {
     "linkage-plane": "composed linkage, plane",
     "linkage-sphere": "composed linkage, sphere",
     "linkage-hinge": "composed linkage driven at a moving hinge",
+    "stephenson3-hinge": "Stephenson III driven at its hinge D (a triad with a leg that follows "
+    "the input)",
+    "spherical-stephenson3-hinge": "spherical Stephenson III driven at its hinge E (a spherical "
+    "triad whose shape follows the input)",
 }
 """How docs/cli.md's table names each row."""
 
@@ -166,6 +170,54 @@ def crank_errors(m: Mechanism, theta: np.ndarray, pos: dict[str, np.ndarray]) ->
             ring = np.cos(phi)[..., None] * e1 + np.sin(phi)[..., None] * e2
             want = np.cos(length)[..., None] * pivot + np.sin(length)[..., None] * ring
         out.append(float(np.max(np.linalg.norm(pos[step.name] - want, axis=-1))))
+    return out + hinge_errors(m, theta, pos)
+
+
+def _signed(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    return np.arctan2(u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0], np.sum(u * v, -1))
+
+
+def _sphere_angle(at: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The angle at ``at`` from the great circle towards ``a`` to the one towards ``b``,
+    right-handed about +O·at."""
+    ta = a - np.sum(a * at, -1, keepdims=True) * at
+    tb = b - np.sum(b * at, -1, keepdims=True) * at
+    return np.arctan2(np.sum(np.cross(ta, tb) * at, -1), np.sum(ta * tb, -1))
+
+
+def hinge_errors(m: Mechanism, theta: np.ndarray, pos: dict[str, np.ndarray]) -> list[float]:
+    """Each driven hinge's angle against the input, as a distance (times its arm): at the
+    hinge H from H→Y to H→X for a hinge in a loop or a leg, and from the body's line J1→J2 to
+    H→J3 for a link turning on a triad's body (the step kinds' definitions, written here from
+    them); in the plane counter-clockwise, on the sphere right-handed about the hinge's axis."""
+    params = m.params()
+    out = []
+    sphere = m.plan.space == "sphere"
+    for step in m.plan.steps:
+        kind = type(step).__name__
+        if kind in ("Hinge", "SphereHinge"):
+            h, y, x, arm = step.hinge, step.y, step.far, step.a
+        elif kind in ("LegHingeTriad", "SphereLegHingeTriad"):
+            h, y, x, arm = step.joints[3], step.anchors[2], step.joints[2], step.a
+        elif kind == "BodyHingeTriad":
+            j = step.joints
+            got = _signed(pos[j[1]] - pos[j[0]], pos[j[2]] - pos[j[3]])
+            h, arm = None, step.arm
+        elif kind == "SphereBodyHingeTriad":
+            j = step.joints
+            got = _sphere_angle(pos[j[3]], pos[j[0]], pos[j[2]])
+            h, arm = None, step.arm
+        else:
+            continue
+        if h is not None:
+            if sphere:
+                got = _sphere_angle(pos[h], pos[y], pos[x])
+            else:
+                got = _signed(pos[y] - pos[h], pos[x] - pos[h])
+        want = _param(params, step.phase) + theta
+        gap = np.abs(np.angle(np.exp(1j * (got - want))))
+        length = _param(params, arm)
+        out.append(float(np.max(gap * (np.sin(length) if sphere else length))))
     return out
 
 

@@ -21,7 +21,8 @@ from linkwright.io import load_example
 from linkwright.mechanisms import FourBar, SliderCrank
 from linkwright.mechanisms.base import solve
 
-# One example per planar family (and the Stephenson III driven at its output, a triad).
+# One example per planar family (and the Stephenson III driven at its output, a triad, and at
+# its hinge D; a four-bar driven at a moving hinge).
 PLANAR = [
     "crank-rocker",
     "offset-slider-crank",
@@ -32,6 +33,8 @@ PLANAR = [
     "stephenson1-example",
     "stephenson3-example",
     "stephenson3-output",
+    "stephenson3-driven-at-d",
+    "hinge-driven-fourbar",
     "jansen-leg",
     "klann-leg",
 ]
@@ -319,3 +322,63 @@ def test_spherical_plans_have_bodies_too():
     s = structure(load_example("paper001-fg").mechanism.plan)
     assert s.space == "sphere" and s.pivot == "G"
     assert [len(b.joints) for b in s.bodies] == [2, 2, 2, 2, 3]
+
+
+@pytest.mark.parametrize("inp", ["rocker", "A", "B", "C", "D", "output"])
+def test_a_motor_anywhere_does_the_cranks_work(inp):
+    """Statics (weights and a load, no inertia): a motor anywhere holds the same configuration
+    with the same power. At each configuration the torque at input ``inp`` is the crank-driven
+    linkage's torque times dθ_crank/dθ_inp, the crank angle's rate read off the solved motion
+    (the crank pin's velocity); the crank-driven torque is solved on its own plan, at the crank
+    angle measured on the configuration. The motor's body pair is checked too: the driven body
+    turns relative to the one it reacts on at exactly the input's rate."""
+    from linkwright.dynamics.planar import body_kinematics
+    from linkwright.mechanisms import configurations
+
+    base = load_example("stephenson3-example").mechanism
+    driven = dataclasses.replace(base, input=inp)
+    s = structure(driven.plan)
+    masses = {b.name: MassProps(1.0 + 0.3 * k) for k, b in enumerate(s.bodies)}
+    loads = Loads(inertia=False, gravity=(0.3, -9.81), forces=(("P", (2.0, -1.0)),))
+    crank_s = structure(base.plan)
+    checked = 0
+    for _, motion in configurations(driven, np.radians(np.arange(-180.0, 180.0, 7.0))):
+        f = forces_of(s, driven.params(), motion, masses, loads)
+        if s.counter is not None:
+            kin = [body_kinematics(b, None, motion) for b in s.bodies]
+            rate = kin[s.driven].phi1 - kin[s.counter].phi1
+            assert np.allclose(rate[motion.regular], 1.0, atol=1e-9)
+        for i in np.flatnonzero(f.valid):
+            a = motion.positions["A"][i]
+            theta = np.arctan2(a[1], a[0])
+            rate = motion.velocities["A"][i] @ np.array([-a[1], a[0]]) / (a @ a)  # dθ/dθ_inp
+            if (
+                abs(rate) < 1e-3
+                or min(abs(np.asarray(v)[i]) for v in motion.margins.values()) < 1e-3
+            ):
+                continue
+            base_motion = solve(
+                dataclasses.replace(base, assembly=_sign(motion, i, "A", "B", "B0"),
+                                    assembly2=_sign(motion, i, "C", "D", "D0")),
+                [theta], order=2,
+            )  # fmt: skip
+            assert base_motion.valid[0]
+            g = forces_of(crank_s, base.params(), base_motion, _same(masses, s, crank_s), loads)
+            want = g.input_torque[0] * rate
+            scale = 1.0 + abs(g.input_torque[0] * rate)
+            assert abs(f.input_torque[i] - want) <= 1e-8 * scale, (inp, i)
+            checked += 1
+    assert checked >= 5
+
+
+def _sign(motion, i, p1, p, p2):
+    """The engine's dyad sign of joint ``p`` placed from ``p1`` then ``p2``: sign((p2 − p1) ×
+    (p − p1)), measured on the configuration."""
+    x = {k: motion.positions[k][i] for k in (p1, p, p2)}
+    return float(np.sign(_cross(x[p2] - x[p1], x[p] - x[p1])))
+
+
+def _same(masses, s, other):
+    """The same bodies' masses under the other plan's names (a body is its set of points)."""
+    by_points = {frozenset(b.points): masses[b.name] for b in s.bodies}
+    return {b.name: by_points[frozenset(b.points)] for b in other.bodies}

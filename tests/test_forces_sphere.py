@@ -32,6 +32,7 @@ SPHERICAL = [
     "paper000-fig8-sixbar",
     "paper001-stephenson3",
     "paper001-fg",
+    "paper001-driven-at-e",
 ]
 
 

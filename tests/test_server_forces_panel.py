@@ -256,11 +256,29 @@ def test_the_one_click_masses_work_for_every_example(client: TestClient, name: s
 
 
 def test_a_plan_forces_do_not_know_is_a_message_not_an_error(client: TestClient) -> None:
-    out = _post(client, {"document": _doc("hinge-driven-fourbar", {"crank": 1.0})})
-    assert out["message"] == (
-        "No forces for this linkage yet: forces do not know the step kind Hinge"
-    )
+    # A slider on a guide carried by a moving joint: forces need a guide fixed to the frame.
+    doc = {
+        "format": "linkwright/1",
+        "mechanism": {
+            "family": "linkage",
+            "joints": [
+                {"name": "O", "type": "fixed", "at": [0.0, 0.0]},
+                {"name": "A", "type": "crank", "pivot": "O", "length": 1.0},
+                {"name": "Q", "type": "fixed", "at": [3.0, 0.0]},
+                {"name": "S", "type": "rrp", "p1": "Q", "r": 2.5, "line_point": "A",
+                 "line_angle": 90.0},
+            ],
+            "mass": {"A.length": 1.0},
+        },
+    }  # fmt: skip
+    out = _post(client, {"document": doc})
+    assert out["message"].startswith("No forces for this linkage yet: the slider S runs on a guide")
     assert out["circuits"] == []
+
+
+def test_a_motor_at_a_moving_hinge_has_its_forces(client: TestClient) -> None:
+    out = _post(client, {"document": _doc("hinge-driven-fourbar", {"B.r": 1.0, "B.a": 0.5})})
+    assert out["message"] is None and out["circuits"]
 
 
 # --------------------------------------------------------------------------------------------

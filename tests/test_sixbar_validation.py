@@ -112,8 +112,10 @@ def test_degenerate_attachments_are_rejected(cls, zeros, match):
 
 def test_stephenson3_input_field():
     fields = _example_fields(Stephenson3)
-    for bad in ("Crank", "rocker", 1.0, None):
-        with pytest.raises(InvalidMechanism, match=r"^input: must be 'crank' or 'output'"):
+    for bad in ("Crank", "E", 1.0, None):
+        with pytest.raises(
+            InvalidMechanism, match=r"^input: must be one of crank, output, rocker, A, B, C, D "
+        ):
             Stephenson3(**{**fields, "input": bad})
     m = Stephenson3(**fields)
     assert m.input == "crank" and isinstance(m.input, str)

@@ -33,7 +33,7 @@ from linkwright.engine import (
 )
 from linkwright.engine.evaluate import place_all
 from linkwright.engine.state import ASSEMBLY_TOL, param_value
-from linkwright.engine.triad_steps import SphereTriad, Triad
+from linkwright.engine.triad_steps import PlaneTriadKind, SphereTriad, SphereTriadKind, Triad
 from linkwright.geometry import plane, sphere
 from linkwright.io import load_example
 from linkwright.mechanisms import FourBar, SliderCrank, solve
@@ -233,7 +233,7 @@ def _displaced(step, positions, params, delta):
     """The positions with one joint of ``step`` moved so that exactly ``delta`` of error
     appears in one of its constraints (and no larger one)."""
     out = dict(positions)
-    if isinstance(step, Triad | SphereTriad):
+    if isinstance(step, PlaneTriadKind | SphereTriadKind):  # a triad, driven at a hinge or not
         name, centre = step.joints[0], step.anchors[0]
     elif isinstance(step, DyadRRR | DyadRRP | SphereDyad):
         name, centre = step.name, step.p1

@@ -453,8 +453,10 @@ def _continues(plan, params, points, circuit, joints, substeps=16):
         there = stack(end)
         # Into a limit position the two merging configurations are a hair apart, and either
         # is the continuation: the landing may be the nearest other configuration, no farther.
-        to_there = np.where(m.valid[:, 0], np.max(np.abs(cand - there), -1), np.inf)
-        reach = max(1e-7, float(np.min(to_there[to_there > 1e-12], initial=np.inf)))
+        # (The nearest other: the second nearest, since ``there`` is itself one of them, to
+        # rounding.)
+        to_there = np.sort(np.where(m.valid[:, 0], np.max(np.abs(cand - there), -1), np.inf))
+        reach = max(1e-7, float(to_there[1]) if len(to_there) > 1 else np.inf)
         reach = reach if at_limit(b) else 1e-7
         assert np.max(np.abs(here - there)) <= reach * (1 + 1e-9), (k, np.degrees([a, b]))
 

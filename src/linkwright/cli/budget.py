@@ -162,7 +162,9 @@ def _triad(doc: Any, all_configurations: bool, derivatives: bool) -> str | None:
     """The space of the triad solve ``solve`` runs (as :func:`linkwright.io.results.solve_document`
     chooses it), or None for a plan's sign combinations."""
     mech = doc.mechanism
-    output_driven = getattr(mech, "input", "crank") in ("output", "FG")
+    from linkwright.io.results import triad_driven
+
+    output_driven = triad_driven(mech)
     paper001 = all_configurations and not derivatives and doc.family == "spherical-stephenson3"
     if output_driven:
         return "sphere" if doc.family.startswith("spherical-") else "plane"

@@ -10,7 +10,11 @@ two joints or more (they cannot move apart, so they are one body):
 - a rigid point extends the link that carries it into a plate;
 - a triad makes its three binary links and its ternary link;
 - a trammel makes a slider block at its joint, and the arm's far end slides on the second
-  guide (a massless pin in a slot: a normal force only).
+  guide (a massless pin in a slot: a normal force only);
+- a driven hinge makes its three binary links, and a triad driven at a hinge its legs, the
+  hinge's links and its ternary link. The motor sits between two moving bodies: it turns the
+  link from the hinge to the joint it places (X, or the triad's J3) and reacts on the body that
+  holds the hinge's other side (the link to Y, or the triad's ternary link).
 
 A body is named by the length field of the link that made it (``crank``, ``coupler``,
 ``rocker``: the names a document's ``[mechanism.mass]`` table uses); a slider block by
@@ -29,6 +33,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from linkwright.engine.hinge_steps import Hinge, SphereHinge
+from linkwright.engine.hinge_triad_steps import (
+    BodyHingeTriad,
+    LegHingeTriad,
+    SphereBodyHingeTriad,
+    SphereLegHingeTriad,
+)
 from linkwright.engine.plan import (
     Crank,
     DyadRRP,
@@ -87,6 +98,8 @@ class Structure:
     ``driven`` is the body the input turns (the first crank's); ``geared`` are the other
     cranks' bodies with their ratio parameters (each turns at ``ratio / driven ratio`` of the
     driven one, through an ideal gear pair on the frame); ``ground`` the frame's points.
+    ``counter`` is the body the motor reacts on where it sits at a moving hinge (None: on the
+    frame); the input is then the driven body's angle relative to it.
     """
 
     bodies: tuple[Body, ...]
@@ -96,7 +109,9 @@ class Structure:
     geared: tuple[tuple[int, str | float], ...] = ()
     space: str = "plane"
     pivot: str = ""
-    """The driven crank's ground pivot (on the sphere its axis carries the driving torque)."""
+    """The driven crank's ground pivot, or the driven hinge (on the sphere its axis carries the
+    driving torque)."""
+    counter: int | None = None
 
     def body(self, name: str) -> Body:
         for b in self.bodies:
@@ -166,6 +181,23 @@ def structure(plan: Plan) -> Structure:
         joints = tuple(p for p in pts if count[p] + (p in ground) >= 2)
         bodies.append(Body(g.name or "", pts, joints, g.frame, g.guide, g.far_end))
     cranks = [k for k, g in enumerate(moving) if g.crank is not None]
+    drives = [d for step in plan.steps if (d := _hinge_drive(step)) is not None]
+    if drives and not cranks:
+        hinge, turned, held = drives[0]
+
+        def holding(pair: tuple[str, str]) -> int:
+            return next(k for k, g in enumerate(moving) if set(pair) <= g.points)
+
+        return Structure(
+            tuple(bodies),
+            frozenset(ground),
+            holding(turned),
+            1.0,
+            (),
+            plan.space,
+            hinge,
+            counter=holding(held),
+        )
     if not cranks:
         raise UnsupportedPlan("the plan has no crank: nothing says which link the input drives")
     first_crank = next(s for s in plan.steps if isinstance(s, Crank | SphereCrank))
@@ -218,6 +250,29 @@ def _groups_of(step: object, ground: set[str]) -> list[_Group]:
         ]
     if isinstance(step, Fixed):
         return []
+    if isinstance(step, Hinge | SphereHinge):
+        h, x = step.hinge, step.far
+        return [
+            _Group({step.z, x}, _word(step.r), (step.z, x)),
+            _Group({h, x}, _word(step.a), (h, x)),
+            _Group({step.y, h}, _word(step.b), (step.y, h)),
+        ]
+    if isinstance(step, LegHingeTriad | SphereLegHingeTriad):
+        j, k = step.joints, step.anchors
+        return [
+            _Group({k[0], j[0]}, _word(step.lengths[0]), (k[0], j[0])),
+            _Group({k[1], j[1]}, _word(step.lengths[1]), (k[1], j[1])),
+            _Group({k[2], j[3]}, _word(step.b), (k[2], j[3])),
+            _Group({j[3], j[2]}, _word(step.a), (j[3], j[2])),
+            _Group(set(j[:3]), _word(step.side), (j[0], j[1])),
+        ]
+    if isinstance(step, BodyHingeTriad | SphereBodyHingeTriad):
+        j, k = step.joints, step.anchors
+        return [
+            *(_Group({k[n], j[n]}, _word(step.lengths[n]), (k[n], j[n])) for n in range(3)),
+            _Group({j[3], j[2]}, _word(step.arm), (j[3], j[2])),
+            _Group({j[0], j[1], j[3]}, _word(step.side), (j[0], j[1])),
+        ]
     if hasattr(step, "joints") and hasattr(step, "anchors") and hasattr(step, "lengths"):
         # A triad, planar or spherical.
         joints, anchors, lengths = step.joints, step.anchors, step.lengths
@@ -230,6 +285,20 @@ def _groups_of(step: object, ground: set[str]) -> list[_Group]:
         out.append(_Group(set(joints), named, (joints[0], joints[1])))
         return out
     raise UnsupportedPlan(f"forces do not know the step kind {type(step).__name__}")
+
+
+def _hinge_drive(step: object) -> tuple[str, tuple[str, str], tuple[str, str]] | None:
+    """For a step driven at a moving hinge: the hinge, two joints of the link its motor turns,
+    and two joints of the body the motor reacts on (the input is the angle between them)."""
+    if isinstance(step, Hinge | SphereHinge):
+        return step.hinge, (step.hinge, step.far), (step.hinge, step.y)
+    if isinstance(step, LegHingeTriad | SphereLegHingeTriad):
+        j = step.joints
+        return j[3], (j[3], j[2]), (j[3], step.anchors[2])
+    if isinstance(step, BodyHingeTriad | SphereBodyHingeTriad):
+        j = step.joints
+        return j[3], (j[3], j[2]), (j[0], j[1])
+    return None
 
 
 def _word(p: str | float) -> str | None:

@@ -22,8 +22,10 @@ Sign conventions: a reaction named by a ground pivot is the force the frame exer
 link; one named by a moving joint, the force the body placed earlier (in plan order) exerts on
 the one placed later; at a joint of three bodies or more, ``"X:body"`` names each body's. The
 driving torque is the torque the motor on the frame exerts on the driven link (positive
-counter-clockwise). Shaking force and moment: what the moving links exert on the frame through
-its bearings, guides, motor and gears (moment about the origin).
+counter-clockwise); a motor at a moving hinge exerts it on the link it turns and the opposite
+on the body it reacts on, and the frame takes none of it. Shaking force and moment: what the
+moving links exert on the frame through its bearings, guides, motor and gears (moment about the
+origin).
 
 Units: the document's mass and length units and seconds: kilograms and metres give newtons,
 newton-metres and joules.
@@ -282,6 +284,8 @@ def forces_of(
             labels.append(("far_end", b.name))
     col = column()
     col[..., 3 * st.driven + 2] = 1.0
+    if st.counter is not None:  # a motor at a moving hinge: it reacts on the other side
+        col[..., 3 * st.counter + 2] = -1.0
     labels.append(("input", ""))
     ratio_d = param_value(st.driven_ratio, params)
     for k, ratio in st.geared:
@@ -337,7 +341,8 @@ def forces_of(
             shake_m -= plane.cross(end, f)
         elif kind == "input":
             torque = solution[..., k]
-            shake_m -= torque
+            if st.counter is None:
+                shake_m -= torque
         elif kind == "gear":
             gear_tau = solution[..., k]
             gears[name] = gear_tau
@@ -461,8 +466,11 @@ def _energy(
     for end_a, end_b, damp in loads.dampers:
         _, ell1, _ = _span(motion, end_a, end_b)
         rate += damp * omega * ell1 * ell1
+    turn = kin[st.driven].phi1
+    if st.counter is not None:
+        turn = turn - kin[st.counter].phi1
     with np.errstate(divide="ignore", invalid="ignore"):
-        torque = rate / kin[st.driven].phi1
+        torque = rate / turn
     return torque, kinetic, potential
 
 

@@ -249,6 +249,8 @@ def forces_of_sphere(
     drive_axis = pos[st.pivot]
     col = np.zeros(shape + (3 * nb,))
     col[..., 3 * st.driven : 3 * st.driven + 3] = drive_axis
+    if st.counter is not None:  # a motor at a moving hinge: it reacts on the other side
+        col[..., 3 * st.counter : 3 * st.counter + 3] = -drive_axis
     moment_cols.append(col)
     if len(moment_cols) != 3 * nb:
         raise UnsupportedPlan(
@@ -276,7 +278,8 @@ def forces_of_sphere(
             shake_f -= force
             shake_m -= mom
     torque = solution[..., -1]
-    shake_m -= torque[..., None] * drive_axis
+    if st.counter is None:
+        shake_m -= torque[..., None] * drive_axis
 
     # The energy balance, per radian of input.
     rate = np.zeros(shape)
@@ -290,7 +293,8 @@ def forces_of_sphere(
     for point, value in loads.forces:
         rate -= r * sphere.dot(np.asarray(value, dtype=float), motion.velocities[point])
     with np.errstate(divide="ignore", invalid="ignore"):
-        energy = rate / sphere.dot(drive_axis, kin[st.driven].w)
+        turn = kin[st.driven].w if st.counter is None else kin[st.driven].w - kin[st.counter].w
+        energy = rate / sphere.dot(drive_axis, turn)
 
     mask = ok & np.isfinite(torque)
     nan = np.where(mask, 1.0, np.nan)

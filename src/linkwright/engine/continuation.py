@@ -718,9 +718,14 @@ def _resample(
     else:
         measure = np.array([abs(p[0][-1] - p[0][0]) for p in pieces])
     total = float(measure.sum()) or 1.0
+    # Each segment's share of the samples, by largest remainders so that they sum to
+    # ``samples`` exactly (rounding each share could add one a segment), at least two each.
+    raw = samples * measure / total
+    counts = np.floor(raw).astype(int)
+    counts[np.argsort(counts - raw)[: samples - int(counts.sum())]] += 1
+    counts = np.maximum(counts, 2)
     want_theta, want_x, want_label = [], [], []
-    for (seg_theta, seg_x, walked, label), size in zip(pieces, measure, strict=True):
-        count = max(2, round(samples * size / total))
+    for (seg_theta, seg_x, walked, label), count in zip(pieces, counts, strict=True):
         t = np.arange(count) / count
         if spacing == "path" and walked[-1] > 0:
             along = walked  # evenly in the travel

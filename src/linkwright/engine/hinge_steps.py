@@ -56,7 +56,7 @@ coordinates (about ε·size) spoils by ε·size/|X Y|. Within 1e-7 of the fold t
 1e-9 of the size, so the step answers "no pose" there, as a crank-driven four-bar's dyad does
 where A falls on B0."""
 
-__all__ = ["Hinge", "SphereHinge"]
+__all__ = ["Hinge", "SphereHinge", "Track", "plane_hinge_point", "sphere_hinge_point"]
 
 
 def _complex(v: Array) -> Array:
@@ -66,6 +66,86 @@ def _complex(v: Array) -> Array:
 
 def _vector(c: Array) -> Array:
     return np.stack((c.real, c.imag), axis=-1)
+
+
+Track = tuple[Array, Array | None, Array | None]
+"""A joint's position and, where asked for, its first two derivatives by the input."""
+
+
+def plane_hinge_point(y: Track, x: Track, phi: Array, a: Array, b: Array) -> Track:
+    """The hinge H of the triangle H X Y with |H X| = a, |H Y| = b and the angle φ at H (from
+    H→Y to H→X), from X and Y, and its derivatives from theirs (φ′ = 1).
+
+    In complex numbers, with q(φ) = b − a e^{iφ}, ``H = Y + b (X − Y) / q``: smooth wherever
+    |X Y| = |q| > 0, through φ = 0 and π too, where H lies on the line X Y. Used by every step
+    that drives a hinge (:class:`Hinge`, the triads of :mod:`.hinge_triad_steps`).
+    """
+    (yp, vy, ay), (xp, vx, ax) = y, x
+    e = np.exp(1j * phi)
+    q, q1, q2 = b - a * e, -1j * a * e, a * e
+    w = _complex(xp - yp)
+    vel_h = acc_h = None
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        h = yp + _vector(b * w / q)
+        if vx is not None and vy is not None:
+            w1 = _complex(vx - vy)
+            vel_h = vy + _vector(b * (w1 / q - w * q1 / q**2))
+            if ax is not None and ay is not None:
+                w2 = _complex(ax - ay)
+                acc_h = ay + _vector(
+                    b * (w2 / q - 2 * w1 * q1 / q**2 - w * q2 / q**2 + 2 * w * q1**2 / q**3)
+                )
+    return h, vel_h, acc_h
+
+
+def sphere_hinge_point(y: Track, x: Track, phi: Array, a: Array, b: Array) -> Track:
+    """The spherical hinge H of the triangle H X Y (arcs |H X| = a, |H Y| = b, the angle φ at
+    H from the great circle H→Y to H→X, right-handed about +O·H), from X and Y, and its
+    derivatives from theirs: H sits at arc b from Y, turned by the triangle's angle β at Y
+    from the great circle Y→X (:func:`_hinge_turn`)."""
+    (yp, vy, ay), (xp, vx, ax) = y, x
+    beta, beta1, beta2 = _hinge_turn(phi, a, b)
+    vel_h = acc_h = None
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        c = sphere.dot(xp, yp)
+        s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+        u = xp - c[..., None] * yp
+        t = u / s[..., None]
+        n = sphere.cross(yp, t)
+        cb, sbt = np.cos(b)[..., None], np.sin(b)[..., None]
+        cbt, sbeta = np.cos(beta)[..., None], np.sin(beta)[..., None]
+        h = cb * yp + sbt * (cbt * t + sbeta * n)
+        if vx is not None and vy is not None:
+            c1 = sphere.dot(vx, yp) + sphere.dot(xp, vy)
+            s1 = -c * c1 / s
+            u1 = vx - c1[..., None] * yp - c[..., None] * vy
+            t1 = u1 / s[..., None] - u * (s1 / s**2)[..., None]
+            n1 = sphere.cross(vy, t) + sphere.cross(yp, t1)
+            b1 = beta1[..., None]
+            vel_h = cb * vy + sbt * (-sbeta * b1 * t + cbt * t1 + cbt * b1 * n + sbeta * n1)
+            if ax is not None and ay is not None:
+                c2 = sphere.dot(ax, yp) + 2.0 * sphere.dot(vx, vy) + sphere.dot(xp, ay)
+                s2 = -(c1 * c1 + c * c2) / s - c * c * c1 * c1 / s**3
+                u2 = ax - c2[..., None] * yp - 2.0 * c1[..., None] * vy - c[..., None] * ay
+                t2 = (
+                    u2 / s[..., None]
+                    - 2.0 * u1 * (s1 / s**2)[..., None]
+                    - u * (s2 / s**2)[..., None]
+                    + 2.0 * u * (s1 * s1 / s**3)[..., None]
+                )
+                n2 = sphere.cross(ay, t) + 2.0 * sphere.cross(vy, t1) + sphere.cross(yp, t2)
+                b2 = beta2[..., None]
+                acc_h = cb * ay + sbt * (
+                    -cbt * b1 * b1 * t
+                    - sbeta * b2 * t
+                    - 2.0 * sbeta * b1 * t1
+                    + cbt * t2
+                    - sbeta * b1 * b1 * n
+                    + cbt * b2 * n
+                    + 2.0 * cbt * b1 * n1
+                    + sbeta * n2
+                )
+    return h, vel_h, acc_h
 
 
 @dataclass(frozen=True)
@@ -177,20 +257,16 @@ class Hinge(_HingeStep):
         jz, jy = ctx.joint(self.z), ctx.joint(self.y)
         r, a, b = ctx.scalar(self.r), ctx.scalar(self.a), ctx.scalar(self.b)
         phi = ctx.scalar(self.phase) + ctx.theta
-        e = np.exp(1j * phi)
-        q = b - a * e
-        d = np.abs(q)
+        d = np.abs(b - a * np.exp(1j * phi))
         sign, asked, named = self._side(ctx)
         meet = plane.circle_circle(jz.pos, r, jy.pos, d, sign, tol=ASSEMBLY_TOL)
         valid = jz.valid & jy.valid & meet.valid & named & (d > FOLD * (a + b))
         x = np.where(valid[..., None], meet.point, np.nan)
-        w = _complex(x - jy.pos)
         with np.errstate(divide="ignore", invalid="ignore"):
-            h = jy.pos + _vector(b * w / q)
             span = plane.norm(jy.pos - jz.pos)
             closure = plane.cross(jy.pos - jz.pos, x - jz.pos) / (span * r)
         regular = valid & jz.regular & jy.regular & (np.abs(closure) > SINGULAR_SIN)
-        vel_x = vel_h = acc_x = acc_h = None
+        vel_x = acc_x = vy = ay = None
         if ctx.order >= 1:
             vz, vy = derivative(jz.vel), derivative(jy.vel)
             rel_z, rel_y = x - jz.pos, x - jy.pos
@@ -198,12 +274,8 @@ class Hinge(_HingeStep):
             vel_x, _ = plane.solve_2x2_rows(
                 rel_z, rel_y, plane.dot(rel_z, vz), plane.dot(rel_y, vy) + dd1
             )
-            q1 = -1j * a * e
-            w1 = _complex(vel_x - vy)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                vel_h = vy + _vector(b * (w1 / q - w * q1 / q**2))
         if ctx.order >= 2:
-            assert vel_x is not None
+            assert vel_x is not None and vy is not None
             az, ay = derivative(jz.acc), derivative(jy.acc)
             sz, sy = vel_x - vz, vel_x - vy
             acc_x, _ = plane.solve_2x2_rows(
@@ -212,12 +284,7 @@ class Hinge(_HingeStep):
                 plane.dot(rel_z, az) - plane.dot(sz, sz),
                 plane.dot(rel_y, ay) - plane.dot(sy, sy) + a * b * np.cos(phi),
             )
-            q2 = a * e
-            w2 = _complex(acc_x - ay)
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                acc_h = ay + _vector(
-                    b * (w2 / q - 2 * w1 * q1 / q**2 - w * q2 / q**2 + 2 * w * q1**2 / q**3)
-                )
+        h, vel_h, acc_h = plane_hinge_point((jy.pos, vy, ay), (x, vel_x, acc_x), phi, a, b)
         rates = (vel_h, acc_h, vel_x, acc_x)
         return self._states(h, x, rates, valid, regular, closure, asked)
 
@@ -339,20 +406,11 @@ class SphereHinge(_HingeStep):
         meet = sphere.small_circles(z, r, y, d, sign, tol=ASSEMBLY_TOL)
         valid = jz.valid & jy.valid & meet.valid & named & (np.sin(d) > FOLD * (a + b))
         x = np.where(valid[..., None], meet.point, np.nan)
-        beta, beta1, beta2 = _hinge_turn(phi, a, b)
         with np.errstate(divide="ignore", invalid="ignore"):
-            c = sphere.dot(x, y)
-            s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
-            u = x - c[..., None] * y
-            t = u / s[..., None]
-            n = sphere.cross(y, t)
-            cb, sbt, cbt = np.cos(b)[..., None], np.sin(b)[..., None], np.cos(beta)[..., None]
-            sbeta = np.sin(beta)[..., None]
-            h = cb * y + sbt * (cbt * t + sbeta * n)
             span = sphere.norm(sphere.cross(z, y))
             closure = sphere.dot(sphere.cross(z, y), x) / (span * np.sin(r))
         regular = valid & jz.regular & jy.regular & (np.abs(closure) > SINGULAR_SIN)
-        vel_x = vel_h = acc_x = acc_h = None
+        vel_x = acc_x = vy = ay = None
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             zero = np.zeros(x.shape[:-1])
             if ctx.order >= 1:
@@ -361,15 +419,8 @@ class SphereHinge(_HingeStep):
                 vel_x, _ = sphere.solve_3x3_rows(
                     z, y, x, -sphere.dot(x, vz), -sphere.dot(x, vy) - sin_term, zero
                 )
-                c1 = sphere.dot(vel_x, y) + sphere.dot(x, vy)
-                s1 = -c * c1 / s
-                u1 = vel_x - c1[..., None] * y - c[..., None] * vy
-                t1 = u1 / s[..., None] - u * (s1 / s**2)[..., None]
-                n1 = sphere.cross(vy, t) + sphere.cross(y, t1)
-                b1 = beta1[..., None]
-                vel_h = cb * vy + sbt * (-sbeta * b1 * t + cbt * t1 + cbt * b1 * n + sbeta * n1)
             if ctx.order >= 2:
-                assert vel_x is not None
+                assert vel_x is not None and vy is not None
                 az, ay = derivative(jz.acc), derivative(jy.acc)
                 acc_x, _ = sphere.solve_3x3_rows(
                     z,
@@ -379,27 +430,7 @@ class SphereHinge(_HingeStep):
                     -2.0 * sphere.dot(vel_x, vy) - sphere.dot(x, ay) - sa * sb * np.cos(phi),
                     -sphere.dot(vel_x, vel_x),
                 )
-                c2 = sphere.dot(acc_x, y) + 2.0 * sphere.dot(vel_x, vy) + sphere.dot(x, ay)
-                s2 = -(c1 * c1 + c * c2) / s - c * c * c1 * c1 / s**3
-                u2 = acc_x - c2[..., None] * y - 2.0 * c1[..., None] * vy - c[..., None] * ay
-                t2 = (
-                    u2 / s[..., None]
-                    - 2.0 * u1 * (s1 / s**2)[..., None]
-                    - u * (s2 / s**2)[..., None]
-                    + 2.0 * u * (s1 * s1 / s**3)[..., None]
-                )
-                n2 = sphere.cross(ay, t) + 2.0 * sphere.cross(vy, t1) + sphere.cross(y, t2)
-                b2 = beta2[..., None]
-                acc_h = cb * ay + sbt * (
-                    -cbt * b1 * b1 * t
-                    - sbeta * b2 * t
-                    - 2.0 * sbeta * b1 * t1
-                    + cbt * t2
-                    - sbeta * b1 * b1 * n
-                    + cbt * b2 * n
-                    + 2.0 * cbt * b1 * n1
-                    + sbeta * n2
-                )
+        h, vel_h, acc_h = sphere_hinge_point((y, vy, ay), (x, vel_x, acc_x), phi, a, b)
         rates = (vel_h, acc_h, vel_x, acc_x)
         return self._states(h, x, rates, valid, regular, closure, asked)
 

@@ -548,6 +548,9 @@ def triad_rates(
     anchor_acc: ArrayLike,
     joints: ArrayLike,
     lengths: ArrayLike,
+    *,
+    leg_rates: tuple[ArrayLike, ArrayLike] | None = None,
+    body_rates: tuple[ArrayLike, ArrayLike] | None = None,
 ) -> TriadRates:
     """Velocities and accelerations of a triad's joints from those of its anchors.
 
@@ -562,6 +565,13 @@ def triad_rates(
     the determinant is relative). Where ``|det|`` is below 1e-8 the triad is at a singular
     position (its links' lines meet in one point, or are parallel), and every output is NaN.
 
+    A triad driven at a hinge changes with the input: a leg's length (``leg_rates``: the
+    derivatives (L²)′/2 and (L²)″/2 of each leg, added to the right-hand sides) or a joint's
+    place on the body (``body_rates``: each joint's velocity w_k and acceleration a_k relative
+    to the body, in the plane's axes). Then ``J̇_k = V + ω ρ_k^⊥ + w_k`` and
+    ``J̈_k = A + α ρ_k^⊥ − ω² ρ_k + 2ω w_k^⊥ + a_k``, and the rows' right-hand sides lose
+    ``e_k·w_k`` and ``e_k·(2ω w_k^⊥ + a_k)``.
+
     Parameters
     ----------
     anchor_pos, anchor_vel, anchor_acc : ``(..., 3, 2)``, the anchors K_k and their first and
@@ -569,6 +579,7 @@ def triad_rates(
     joints : ``(..., 3, 2)``, one pose (e.g. ``poses.joints``, with the anchors given an axis
         for the poses: ``anchor_pos[..., None, :, :]``).
     lengths : ``(..., 3)``, the link lengths.
+    leg_rates, body_rates : optional, ``(..., 3)`` twice and ``(..., 3, 2)`` twice.
 
     Returns
     -------
@@ -603,6 +614,12 @@ def triad_rates(
     e = j - k
     rho = j - j[..., :1, :]
     body = np.maximum(plane.norm(rho[..., 1, :]), plane.norm(rho[..., 2, :]))
+    c1, c2 = (0.0, 0.0) if leg_rates is None else (np.asarray(r, dtype=float) for r in leg_rates)
+    w, wa = (
+        (np.zeros_like(rho), np.zeros_like(rho))
+        if body_rates is None
+        else (np.asarray(r, dtype=float) for r in body_rates)
+    )
     with np.errstate(divide="ignore", invalid="ignore"):
         row_scale = 1.0 / lengths  # each row is then a unit direction and a lever arm / size
         ang_scale = 1.0 / body
@@ -611,16 +628,18 @@ def triad_rates(
             np.broadcast_arrays(ex, ey, plane.cross(rho, e) * row_scale * ang_scale[..., None]),
             axis=-1,
         )
-        r1 = plane.dot(e, kv) * row_scale
+        r1 = (plane.dot(e, kv - w) + c1) * row_scale
         sol1, det = _solve3(m, r1)
         v = sol1[..., :2]
         omega = sol1[..., 2] * ang_scale
-        vel = v[..., None, :] + omega[..., None, None] * plane.perp(rho)
+        vel = v[..., None, :] + omega[..., None, None] * plane.perp(rho) + w
         rel_vel = vel - kv
+        carried = 2.0 * omega[..., None, None] * plane.perp(w) + wa
         r2 = (
-            plane.dot(e, ka)
+            plane.dot(e, ka - carried)
             - plane.dot(rel_vel, rel_vel)
             + (omega**2)[..., None] * plane.dot(e, rho)
+            + c2
         )
         sol2, _ = _solve3(m, r2 * row_scale)
         a = sol2[..., :2]
@@ -629,6 +648,7 @@ def triad_rates(
             a[..., None, :]
             + alpha[..., None, None] * plane.perp(rho)
             - (omega**2)[..., None, None] * rho
+            + carried
         )
     regular = np.abs(det) > SINGULAR_DET
     regular &= np.isfinite(vel).all(axis=(-1, -2)) & np.isfinite(acc).all(axis=(-1, -2))

@@ -54,21 +54,28 @@ from linkwright.engine.triad import triad_poses, triad_rates
 from linkwright.geometry import plane, sphere
 
 __all__ = [
+    "Changes",
+    "PlaneTriadKind",
     "SphereTriad",
+    "SphereTriadKind",
     "Triad",
+    "TriadSolution",
+    "broadcast_scalars",
     "sphere_triad_rates",
     "triad_closure",
     "triad_residual",
 ]
 
 Array = NDArray[np.float64]
+Rates = tuple[Array, Array]
+"""A quantity's first and second derivatives by the input."""
 
 
 def _stack_states(states: list[JointState], attr: str) -> Array:
     return np.stack([getattr(s, attr) for s in states], axis=-2)
 
 
-def _broadcast_scalars(ctx: Context, params: tuple[Param, ...]) -> Array:
+def broadcast_scalars(ctx: Context, params: tuple[Param, ...]) -> Array:
     """The step's scalar parameters as one array ``(..., samples, len(params))``."""
     values = [np.broadcast_to(ctx.scalar(p), ctx.theta.shape) for p in params]
     return np.stack(values, axis=-1)
@@ -185,6 +192,32 @@ def triad_residual(
     return worst_arc
 
 
+@dataclass(frozen=True)
+class Changes:
+    """How a triad driven at a hinge changes with the input: its legs' rates (see
+    :func:`linkwright.engine.triad.triad_rates`) and its joints' motion relative to the body."""
+
+    legs: Rates | None = None
+    body: Rates | None = None
+
+
+@dataclass(frozen=True)
+class TriadSolution:
+    """One pose of a triad at each sample: its joints ``(..., 3, d)`` and their derivatives,
+    where it is placed and regular, its closure, the pose asked for, and its anchors' states."""
+
+    pos: Array
+    vel: Array | None
+    acc: Array | None
+    valid: NDArray[np.bool_]
+    regular: NDArray[np.bool_]
+    closure: Array
+    asked: Array
+    anchors: Array
+    anchor_vel: Array | None
+    anchor_acc: Array | None
+
+
 class _TriadStep:
     """What the planar and the spherical triad share: the pose index, the closure, the states.
 
@@ -193,12 +226,17 @@ class _TriadStep:
     :meth:`_rates` (the derivatives of one pose).
     """
 
-    joints: tuple[str, str, str]
+    joints: tuple[str, ...]
     anchors: tuple[str, str, str]
-    lengths: tuple[Param, Param, Param]
+    lengths: tuple[Param, ...]
     pose: str
     max_poses: int
     space: str
+
+    @property
+    def held(self) -> tuple[str, str, str]:
+        """The ternary link's three joints (a triad driven at a hinge places the hinge too)."""
+        return (self.joints[0], self.joints[1], self.joints[2])
 
     @property
     def name(self) -> str:
@@ -211,12 +249,12 @@ class _TriadStep:
 
     def links(self) -> tuple[tuple[str, str], ...]:
         """The three binary links and the ternary's three sides."""
-        j, k = self.joints, self.anchors
+        j, k = self.held, self.anchors
         return ((k[0], j[0]), (k[1], j[1]), (k[2], j[2]), (j[0], j[1]), (j[1], j[2]), (j[0], j[2]))
 
     def plates(self) -> tuple[tuple[str, ...], ...]:
         """The ternary link."""
-        return (self.joints,)
+        return (self.held,)
 
     @property
     def body(self) -> tuple[Param, Param, Param]:
@@ -224,7 +262,7 @@ class _TriadStep:
 
     @property
     def title(self) -> str:
-        return f"triad {''.join(self.joints)}"
+        return f"triad {''.join(self.held)}"
 
     @staticmethod
     def _read(positions: Positions, names: tuple[str, ...]) -> Array:
@@ -239,7 +277,7 @@ class _TriadStep:
         """The relative determinant of the constraints at the placed pose
         (:func:`triad_closure`): 0 where two poses merge, its sign tells them apart. Whether
         the triad assembles at all is its pose count (0 where it has no real pose)."""
-        joints = self._read(positions, self.joints)
+        joints = self._read(positions, self.held)
         anchors = self._read(positions, self.anchors)
         lengths = self._lengths(params, joints.shape[:-2])
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -248,7 +286,7 @@ class _TriadStep:
     def residual(self, positions: Positions, params: Params, theta: ArrayLike) -> Array:
         """The largest error of the three links and of the ternary link's shape
         (:func:`triad_residual`, in the plane's units, radians and chords on the sphere)."""
-        joints = self._read(positions, self.joints)
+        joints = self._read(positions, self.held)
         anchors = self._read(positions, self.anchors)
         shape = joints.shape[:-2]
         lengths = self._lengths(params, shape)
@@ -257,7 +295,7 @@ class _TriadStep:
 
     def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
         """Why the step cannot place its joints at an input where it has no pose."""
-        j, k = self.joints, self.anchors
+        j, k = self.held, self.anchors
         return (
             f"the ternary link {''.join(j)} cannot be held by its three links "
             f"{k[0]}{j[0]}, {k[1]}{j[1]} and {k[2]}{j[2]}: the triad has no real pose"
@@ -265,8 +303,8 @@ class _TriadStep:
 
     def at_limit(self) -> str:
         """What happens at a limit position of the input."""
-        j = "".join(self.joints)
-        held = ", ".join(f"{a}{b}" for a, b in zip(self.anchors, self.joints, strict=True))
+        j = "".join(self.held)
+        held = ", ".join(f"{a}{b}" for a, b in zip(self.anchors, self.held, strict=True))
         return (
             f"triad {j}: two poses merge (the ternary link {j}, held by {held}, cannot go on "
             "this way in either)"
@@ -279,16 +317,36 @@ class _TriadStep:
         raise NotImplementedError
 
     def _rates(
-        self, anchors: Array, kvel: Array, kacc: Array | None, pos: Array, lengths: Array
+        self,
+        anchors: Array,
+        kvel: Array,
+        kacc: Array | None,
+        pos: Array,
+        lengths: Array,
+        changes: Changes,
     ) -> tuple[Array, Array | None, NDArray[np.bool_]]:
         """Velocities and accelerations of the joints of one pose, and where they exist."""
         raise NotImplementedError
 
-    def place(self, ctx: Context) -> dict[str, JointState]:
+    def _legs(self, ctx: Context) -> tuple[Array, Rates | None]:
+        """The legs' lengths at each sample ``(..., 3)``, and their rates (None: constant)."""
+        return broadcast_scalars(ctx, self.lengths), None
+
+    def _shape(self, ctx: Context) -> tuple[Array, Array, Array]:
+        """The body's three numbers at each sample."""
+        return tuple(np.broadcast_to(ctx.scalar(p), ctx.theta.shape) for p in self.body)  # type: ignore[return-value]
+
+    def _moved(self, ctx: Context, pos: Array) -> Rates | None:
+        """Each joint's velocity and acceleration relative to the body ``(..., 3, d)`` (None:
+        the body keeps its shape)."""
+        return None
+
+    def solve(self, ctx: Context) -> TriadSolution:
+        """The pose asked for at each sample, with its derivatives to the context's order."""
         ks = [ctx.joint(a) for a in self.anchors]
         anchors = np.stack(np.broadcast_arrays(*(k.pos for k in ks)), axis=-2)
-        lengths = _broadcast_scalars(ctx, self.lengths)
-        body = tuple(np.broadcast_to(ctx.scalar(p), ctx.theta.shape) for p in self.body)
+        lengths, leg_rates = self._legs(ctx)
+        body = self._shape(ctx)
         anchored = np.logical_and.reduce([k.valid for k in ks])
         all_joints, count = self._poses(ctx.theta.shape, anchors, lengths, body)
         index, asked = pose_slot(ctx, self.name, self.pose, self.max_poses)
@@ -297,41 +355,28 @@ class _TriadStep:
         with np.errstate(invalid="ignore", divide="ignore"):
             closure = triad_closure(pos, anchors, lengths, self.space)
         regular = valid & np.logical_and.reduce([k.regular for k in ks])
-        vel = acc = None
+        vel = acc = kvel = kacc = None
         if ctx.order >= 1:
             kvel = _stack_states(ks, "vel")
             kacc = _stack_states(ks, "acc") if ctx.order >= 2 else None
+            changes = Changes(leg_rates, self._moved(ctx, pos))
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-                vel, acc, fine = self._rates(anchors, kvel, kacc, pos, lengths)
+                vel, acc, fine = self._rates(anchors, kvel, kacc, pos, lengths, changes)
             regular &= fine
         regular &= np.abs(closure) > SINGULAR_SIN
-        return pose_states(self.joints, pos, vel, acc, valid, regular, closure, asked)
+        return TriadSolution(pos, vel, acc, valid, regular, closure, asked, anchors, kvel, kacc)
+
+    def place(self, ctx: Context) -> dict[str, JointState]:
+        t = self.solve(ctx)
+        return pose_states(self.held, t.pos, t.vel, t.acc, t.valid, t.regular, t.closure, t.asked)
 
 
-@dataclass(frozen=True)
-class Triad(_TriadStep):
-    """A planar ternary link J1 J2 J3 held by binary links to the placed joints K1, K2, K3.
-
-    J2 lies at ``side`` from J1 and J3 at (``u``, ``v``) in the body's frame (origin J1, x along
-    J1→J2, v to the left); link k has length ``lengths[k]``. The branch parameter ``pose`` is
-    the pose index, 0 to 5, in the order of the body's rotation at each sample
-    (:func:`linkwright.engine.triad.triad_poses`).
-    """
-
-    joints: tuple[str, str, str]
-    anchors: tuple[str, str, str]
-    lengths: tuple[Param, Param, Param]
-    side: Param
-    u: Param
-    v: Param
-    pose: str = "pose"
+class PlaneTriadKind(_TriadStep):
+    """The planar triad's solvers (degree 6, :mod:`linkwright.engine.triad`), for every step
+    kind that is a planar triad: :class:`Triad` and the triads driven at a hinge."""
 
     max_poses = PLANE_POSES
     space = "plane"
-
-    @property
-    def body(self) -> tuple[Param, Param, Param]:
-        return (self.side, self.u, self.v)
 
     def _poses(
         self, shape: tuple[int, ...], anchors: Array, lengths: Array, body: tuple[Array, ...]
@@ -350,16 +395,57 @@ class Triad(_TriadStep):
         return joints, count
 
     def _rates(
-        self, anchors: Array, kvel: Array, kacc: Array | None, pos: Array, lengths: Array
+        self,
+        anchors: Array,
+        kvel: Array,
+        kacc: Array | None,
+        pos: Array,
+        lengths: Array,
+        changes: Changes,
     ) -> tuple[Array, Array | None, NDArray[np.bool_]]:
         rates = triad_rates(
-            anchors, kvel, np.zeros_like(kvel) if kacc is None else kacc, pos, lengths
+            anchors,
+            kvel,
+            np.zeros_like(kvel) if kacc is None else kacc,
+            pos,
+            lengths,
+            leg_rates=changes.legs,
+            body_rates=changes.body,
         )
         return rates.vel, None if kacc is None else rates.acc, rates.regular
 
 
+@dataclass(frozen=True)
+class Triad(PlaneTriadKind):
+    """A planar ternary link J1 J2 J3 held by binary links to the placed joints K1, K2, K3.
+
+    J2 lies at ``side`` from J1 and J3 at (``u``, ``v``) in the body's frame (origin J1, x along
+    J1→J2, v to the left); link k has length ``lengths[k]``. The branch parameter ``pose`` is
+    the pose index, 0 to 5, in the order of the body's rotation at each sample
+    (:func:`linkwright.engine.triad.triad_poses`).
+    """
+
+    joints: tuple[str, str, str]
+    anchors: tuple[str, str, str]
+    lengths: tuple[Param, Param, Param]
+    side: Param
+    u: Param
+    v: Param
+    pose: str = "pose"
+
+    @property
+    def body(self) -> tuple[Param, Param, Param]:
+        return (self.side, self.u, self.v)
+
+
 def sphere_triad_rates(
-    joints: Array, anchors: Array, anchor_vel: Array, anchor_acc: Array | None
+    joints: Array,
+    anchors: Array,
+    anchor_vel: Array,
+    anchor_acc: Array | None,
+    *,
+    leg_rates: tuple[Array, Array] | None = None,
+    body_rates: tuple[Array, Array] | None = None,
 ) -> tuple[Array, Array | None, Array]:
     """Velocities and accelerations of a spherical triad's joints from its anchors'.
 
@@ -370,7 +456,12 @@ def sphere_triad_rates(
     ``ω·(J_k × K_k) = −J_k·K̇_k`` and
     ``α·(J_k × K_k) = −(ω × (ω × J_k))·K_k − 2 (ω × J_k)·K̇_k − J_k·K̈_k``,
 
-    two 3×3 solves. Returns ``(vel, acc, det)``, ``vel`` and ``acc`` of shape ``(..., 3, 3)``
+    two 3×3 solves. A triad driven at a hinge changes with the input, as in the plane
+    (:func:`linkwright.engine.triad.triad_rates`): ``leg_rates`` are each leg's (cos L)′ and
+    (cos L)″, added to the right-hand sides; ``body_rates`` each joint's velocity w_k and
+    acceleration a_k relative to the body, in the sphere's axes, so that
+    ``J̇_k = ω × J_k + w_k`` and ``J̈_k = α × J_k + ω × (ω × J_k) + 2 ω × w_k + a_k``.
+    Returns ``(vel, acc, det)``, ``vel`` and ``acc`` of shape ``(..., 3, 3)``
     (joint, component), ``acc`` None when ``anchor_acc`` is, and the determinant of the rows
     (scaled by the caller where it needs a relative one).
 
@@ -391,15 +482,20 @@ def sphere_triad_rates(
     """
     rows = sphere.cross(joints, anchors)
     r = rows[..., 0, :], rows[..., 1, :], rows[..., 2, :]
-    rhs1 = -sphere.dot(joints, anchor_vel)
+    c1, c2 = (0.0, 0.0) if leg_rates is None else leg_rates
+    moved, moved_acc = (
+        (np.zeros_like(joints), np.zeros_like(joints)) if body_rates is None else body_rates
+    )
+    rhs1 = c1 - sphere.dot(joints, anchor_vel) - sphere.dot(moved, anchors)
     omega, det = sphere.solve_3x3_rows(*r, rhs1[..., 0], rhs1[..., 1], rhs1[..., 2])
     w = omega[..., None, :]
-    vel = sphere.cross(w, joints)
+    vel = sphere.cross(w, joints) + moved
     acc = None
     if anchor_acc is not None:
-        spin = sphere.cross(w, vel)
+        spin = sphere.cross(w, sphere.cross(w, joints)) + 2.0 * sphere.cross(w, moved) + moved_acc
         rhs2 = (
-            -sphere.dot(spin, anchors)
+            c2
+            - sphere.dot(spin, anchors)
             - 2.0 * sphere.dot(vel, anchor_vel)
             - sphere.dot(joints, anchor_acc)
         )
@@ -416,33 +512,14 @@ def _reference(axis: Array, preferred: Array) -> Array:
     return np.where(parallel[..., None], fallback, preferred)
 
 
-@dataclass(frozen=True)
-class SphereTriad(_TriadStep):
-    """A spherical ternary link J1 J2 J3 held by binary links to the placed joints K1, K2, K3.
-
-    J2 lies at arc ``side`` from J1, and J3 at arc ``arc`` from J1, turned by ``angle`` from the
-    great circle J1→J2 (right-handed about +O·J1, as :class:`~linkwright.engine.SphereRigid`
-    places a point); link k has arc ``lengths[k]``. The branch parameter ``pose`` is the pose
-    index, 0 to 7, in the order of J2's angle on its circle about K2, measured from the great
-    circle K2→K1, right-handed about +O·K2 (``sense = 1``) or left-handed (``sense = -1``), in
-    (−π, π] (:func:`linkwright.engine.sphere_triad.sphere_triad`).
-    """
-
-    joints: tuple[str, str, str]
-    anchors: tuple[str, str, str]
-    lengths: tuple[Param, Param, Param]
-    side: Param
-    arc: Param
-    angle: Param
-    pose: str = "pose"
-    sense: float = 1.0
+class SphereTriadKind(_TriadStep):
+    """The spherical triad's solvers (degree 8, :mod:`linkwright.engine.sphere_triad`), for
+    every step kind that is a spherical triad: :class:`SphereTriad` and the triads driven at a
+    hinge. ``sense`` orders the poses (see :class:`SphereTriad`)."""
 
     max_poses = SPHERE_POSES
     space = "sphere"
-
-    @property
-    def body(self) -> tuple[Param, Param, Param]:
-        return (self.side, self.arc, self.angle)
+    sense: float
 
     def _poses(
         self, shape: tuple[int, ...], anchors: Array, lengths: Array, body: tuple[Array, ...]
@@ -471,7 +548,41 @@ class SphereTriad(_TriadStep):
         return joints, count
 
     def _rates(
-        self, anchors: Array, kvel: Array, kacc: Array | None, pos: Array, lengths: Array
+        self,
+        anchors: Array,
+        kvel: Array,
+        kacc: Array | None,
+        pos: Array,
+        lengths: Array,
+        changes: Changes,
     ) -> tuple[Array, Array | None, NDArray[np.bool_]]:
-        vel, acc, _ = sphere_triad_rates(pos, anchors, kvel, kacc)
+        vel, acc, _ = sphere_triad_rates(
+            pos, anchors, kvel, kacc, leg_rates=changes.legs, body_rates=changes.body
+        )
         return vel, acc, np.asarray(np.isfinite(vel).all(axis=(-1, -2)))
+
+
+@dataclass(frozen=True)
+class SphereTriad(SphereTriadKind):
+    """A spherical ternary link J1 J2 J3 held by binary links to the placed joints K1, K2, K3.
+
+    J2 lies at arc ``side`` from J1, and J3 at arc ``arc`` from J1, turned by ``angle`` from the
+    great circle J1→J2 (right-handed about +O·J1, as :class:`~linkwright.engine.SphereRigid`
+    places a point); link k has arc ``lengths[k]``. The branch parameter ``pose`` is the pose
+    index, 0 to 7, in the order of J2's angle on its circle about K2, measured from the great
+    circle K2→K1, right-handed about +O·K2 (``sense = 1``) or left-handed (``sense = -1``), in
+    (−π, π] (:func:`linkwright.engine.sphere_triad.sphere_triad`).
+    """
+
+    joints: tuple[str, str, str]
+    anchors: tuple[str, str, str]
+    lengths: tuple[Param, Param, Param]
+    side: Param
+    arc: Param
+    angle: Param
+    pose: str = "pose"
+    sense: float = 1.0
+
+    @property
+    def body(self) -> tuple[Param, Param, Param]:
+        return (self.side, self.arc, self.angle)

@@ -23,6 +23,8 @@ from linkwright.io.document_schema import (
     unknown_choice,
 )
 from linkwright.mechanisms.registry import Derived, FieldSpec
+from linkwright.mechanisms.spherical import SPHERE_INPUTS
+from linkwright.mechanisms.stephenson3_inputs import INPUTS
 
 __all__ = [
     "KINDS",
@@ -227,7 +229,12 @@ def _parse_names(value: Any, path: str) -> list[str]:
 def _choice(choices: tuple[str, ...], refused: Mapping[str, str] | None = None) -> Kind:
     """A kind whose value is one of a few strings; ``refused`` explains known-but-unsupported."""
     refused = refused or {}
-    describe = " or ".join(f'"{c}"' for c in choices)
+    quoted = [f'"{c}"' for c in choices]
+    describe = (
+        " or ".join(quoted)
+        if len(quoted) <= 2
+        else "one of " + ", ".join(quoted[:-1]) + " or " + quoted[-1]
+    )
 
     def parse(value: Any, path: str) -> str:
         if not isinstance(value, str):
@@ -381,8 +388,8 @@ KINDS: dict[str, Kind] = {
         lambda v, a: {a[0]: v},
         lambda m, a: _scalar(m, a[0]),
     ),
-    "stephenson_input": _choice(("crank", "output")),
-    "spherical_input": _choice(("AB", "FG")),
+    "stephenson_input": _choice(INPUTS),
+    "spherical_input": _choice(SPHERE_INPUTS),
     "arc": Kind(
         "an arc in degrees, strictly between 0 and 180",
         _parse_arc,

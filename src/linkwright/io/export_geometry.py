@@ -35,7 +35,7 @@ from linkwright.engine import (
     SphereRigid,
     Trammel,
 )
-from linkwright.engine.plan import Plan, placed_joints
+from linkwright.engine.plan import Plan
 from linkwright.files import atomic_path
 from linkwright.geometry.sphere import lambert_azimuthal, map_frame
 from linkwright.mechanisms import Mechanism, circuit, circuits, running_circuit, solve
@@ -237,11 +237,15 @@ def topology(mechanism: Mechanism) -> Topology:
             if not join(step.origin, step.toward, name):
                 new_body(step.origin, step.toward, name)
         elif step in plan.triads:
-            # A ternary link held by three binary links, each from an anchor to its joint.
-            for anchor, joint in step.links()[:3]:
-                used_as_pivot.add(anchor)
-                new_body(anchor, joint)
-            new_body(*placed_joints(step))
+            # Several joints at once (a triad, a driven hinge): its rigid bodies are its plates
+            # (a triad's ternary link), and each of its links that no plate holds.
+            plates = [frozenset(p) for p in step.plates()]
+            for plate in step.plates():
+                new_body(*plate)
+            for a, b in step.links():
+                if not any({a, b} <= p for p in plates):
+                    used_as_pivot.update((a, b))
+                    new_body(a, b)
         else:  # pragma: no cover - a step type this module does not know yet
             raise ExportError(f"joint {name!r}: cannot draw a {type(step).__name__} step")
     # A body on two ground joints cannot move: it is part of the frame, and may ground more.

@@ -23,6 +23,7 @@ __all__ = [
     "ground_xy",
     "solve_document",
     "structure",
+    "triad_driven",
     "unassembled_reason",
     "xy",
 ]
@@ -60,10 +61,15 @@ def structure(mech: Mechanism) -> Any:
         return type(mech).plan
 
 
-def _output_driven(mech: Mechanism) -> bool:
-    """Driven so that a triad remains: the planar Stephenson III at its output link D0D, the
-    spherical one at FG."""
-    return getattr(mech, "input", "crank") in ("output", "FG")
+def triad_driven(mech: Mechanism) -> bool:
+    """A family driven so that a triad remains, its input word choosing the plan: the planar
+    Stephenson III at its output link D0D or at C or D, the spherical one at FG, E or F (a
+    composed linkage lists its configurations as any linkage does)."""
+    from linkwright.engine.triad_steps import PlaneTriadKind, SphereTriadKind
+
+    if not isinstance(getattr(mech, "input", None), str):
+        return False
+    return any(isinstance(s, PlaneTriadKind | SphereTriadKind) for s in structure(mech).steps)
 
 
 def ground_joints(mech: Mechanism) -> tuple[str, ...]:
@@ -107,7 +113,7 @@ def solve_document(
     mech = doc.mechanism
     theta = np.radians(np.asarray(degrees, dtype=float))
     order = 2 if derivatives else 0
-    if _output_driven(mech):
+    if triad_driven(mech):
         return _solve_triad(doc, degrees, theta, derivatives, own=not all_configurations)
     if all_configurations and not derivatives and doc.family == "spherical-stephenson3":
         # Paper 001's analysis: every configuration with its error against every constraint.

@@ -29,7 +29,6 @@ from linkwright.engine import (
     SphereRigid,
     Trammel,
 )
-from linkwright.engine.hinge_steps import Hinge, SphereHinge
 from linkwright.engine.plan import placed_joints
 from linkwright.engine.triad_steps import SphereTriad, Triad
 from linkwright.io.document_kinds import tidy_number
@@ -86,10 +85,10 @@ def _refuse_steps(mech: Mechanism) -> None:
     except (NoConstructionPlan, ValueError) as exc:
         raise SketchError(f"this linkage cannot be edited as a drawing: {exc}") from None
     for step in plan.steps:
-        if isinstance(step, Hinge | SphereHinge):
+        if hasattr(step, "hinge"):  # a driven hinge, or a triad driven at one
             raise SketchError(
-                f"joint {step.name} drives the linkage at a moving hinge, which a drawing cannot "
-                "say yet (a drawing is driven by cranks about ground pivots)"
+                f"joint {step.hinge} drives the linkage at a moving hinge, which a drawing "
+                "cannot say yet (a drawing is driven by cranks about ground pivots)"
             )
         if isinstance(step, Trammel):
             raise SketchError(

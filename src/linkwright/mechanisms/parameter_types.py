@@ -56,6 +56,12 @@ from linkwright.engine import (
     Trammel,
 )
 from linkwright.engine.hinge_steps import Hinge, SphereHinge
+from linkwright.engine.hinge_triad_steps import (
+    BodyHingeTriad,
+    LegHingeTriad,
+    SphereBodyHingeTriad,
+    SphereLegHingeTriad,
+)
 from linkwright.engine.triad_steps import SphereTriad, Triad
 from linkwright.mechanisms.base import Mechanism
 
@@ -102,6 +108,57 @@ ROLES: tuple[tuple[type, dict[str, str]], ...] = (
     (
         SphereTriad,
         {"lengths": "arc", "side": "arc", "arc": "closed-arc", "angle": "angle", "pose": "branch"},
+    ),
+    # Triads driven at a hinge: the hinge's links as lengths (arcs), its phase an angle.
+    (
+        LegHingeTriad,
+        {
+            "lengths": "length",
+            "side": "length",
+            "u": "offset",
+            "v": "offset",
+            "a": "length",
+            "b": "length",
+            "phase": "angle",
+            "pose": "branch",
+        },
+    ),
+    (
+        BodyHingeTriad,
+        {
+            "lengths": "length",
+            "side": "length",
+            "hu": "offset",
+            "hv": "offset",
+            "arm": "length",
+            "phase": "angle",
+            "pose": "branch",
+        },
+    ),
+    (
+        SphereLegHingeTriad,
+        {
+            "lengths": "arc",
+            "side": "arc",
+            "arc": "closed-arc",
+            "angle": "angle",
+            "a": "arc",
+            "b": "arc",
+            "phase": "angle",
+            "pose": "branch",
+        },
+    ),
+    (
+        SphereBodyHingeTriad,
+        {
+            "lengths": "arc",
+            "side": "arc",
+            "harc": "arc",
+            "hangle": "angle",
+            "arm": "arc",
+            "phase": "angle",
+            "pose": "branch",
+        },
     ),
 )
 """What each step kind's parameters are (its *roles*): ``point`` a planar pivot, ``axis`` a

@@ -55,7 +55,6 @@ from numpy.typing import NDArray
 
 from linkwright.engine import Crank, DyadRRR, Fixed, Motion, Plan, Rigid
 from linkwright.engine.plan import Param, Step
-from linkwright.engine.triad_steps import Triad
 from linkwright.geometry import plane
 from linkwright.mechanisms.base import (
     Dimension,
@@ -73,6 +72,7 @@ from linkwright.mechanisms.planar import (
     POINT_FIELD,
 )
 from linkwright.mechanisms.registry import Family, FieldSpec, register
+from linkwright.mechanisms.stephenson3_inputs import DRIVEN_ANGLES, INPUTS, PLANS
 
 __all__ = [
     "NoConstructionPlan",
@@ -219,11 +219,15 @@ class SixBar(Mechanism):
             elif isinstance(step, Rigid):
                 out[step.name] = _frame_error(motion, step, params)
         out["ground"] = np.maximum.reduce(ground)
-        pivot, joint = self.input_link
-        arm = self.crank if joint == "A" else self.link2
-        placed = motion.positions[pivot] + plane.polar(np.asarray(arm)[..., None], motion.input)
-        out["input"] = plane.norm(motion.positions[joint] - placed)
+        out["input"] = self._input_error(motion)
         return {k: v / s for k, v in out.items()}
+
+    def _input_error(self, motion: Motion) -> Array:
+        """The driven joint's distance from where the input angle puts it."""
+        pivot, joint = self.input_link
+        arm = self._link_length(pivot, joint)
+        placed = motion.positions[pivot] + plane.polar(arm[..., None], motion.input)
+        return plane.norm(motion.positions[joint] - placed)
 
 
 @family_dataclass
@@ -518,9 +522,6 @@ class Stephenson1(SixBar):
             )
 
 
-INPUTS = ("crank", "output")
-
-
 @family_dataclass
 class Stephenson3(SixBar):
     """Stephenson III six-bar: a four-bar with a dyad from a coupler point to a ground pivot.
@@ -545,16 +546,20 @@ class Stephenson3(SixBar):
         sign((B0 − A) × (B − A)), as for the four-bar.
     assembly2 : ±1
         sign((D0 − C) × (D − C)).
-    input : {"crank", "output"}
-        Which grounded link the input θ drives: the crank (θ the angle of A − A0; a four-bar
-        plus a dyad) or the output (θ the angle of D − D0). Driven at the output the coupler
-        ABC, held by the crank, the rocker and the link CD, is a triad: a plan step with up to
-        six poses (:class:`~linkwright.engine.triad_steps.Triad`). One value for the whole
-        batch, since it chooses the plan. Its constraints, and :meth:`residuals`, are the same
-        either way except ``input``.
+    input : {"crank", "rocker", "output", "A", "B", "C", "D"}
+        Where the motor sits (:mod:`~linkwright.mechanisms.stephenson3_inputs` has the table):
+        at a grounded link, θ its angle from +x (the crank A0A: a four-bar plus a dyad; the
+        rocker B0B; the output D0D: the coupler ABC, held by the crank, the rocker and the link
+        CD, is then a triad, a plan step with up to six poses,
+        :class:`~linkwright.engine.triad_steps.Triad`), or at a moving hinge, θ the angle
+        between its two links (A or B: a driven hinge in the four-bar's loop; C or D: a triad
+        that changes with the input, :mod:`~linkwright.engine.hinge_triad_steps`). One value
+        for the whole batch, since it chooses the plan. Its constraints, and :meth:`residuals`,
+        are the same however it is driven, except ``input``.
     pose : 0 to 5
-        Driven at the output: which pose of the triad, in the order of the coupler's angle
-        (of B − A) at each input. A name for one configuration at one input, not a branch
+        Driven at the output, C or D: which pose of the triad, in the order of the coupler's
+        angle (of B − A) at each input; driven at A or B, which side of its loop the hinge's far
+        joint lies on (0 or 1). A name for one configuration at one input, not a branch
         followed along the motion (:func:`~linkwright.mechanisms.circuits` follows those).
 
     Notes
@@ -616,48 +621,38 @@ class Stephenson3(SixBar):
     reported_joints: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0", "A", "B", "C", "D", "P")
     ground: ClassVar[tuple[str, ...]] = ("A0", "B0", "D0")
     attached: ClassVar[dict[str, tuple[str, str]]] = {"C": ("A", "B")}
-    plan: ClassVar[Plan] = PlanByInput(  # type: ignore[assignment]
-        crank=Plan(
-            (
-                *_FOURBAR[:2],
-                Fixed("D0", "D0"),
-                *_FOURBAR[2:],
-                Rigid("C", "A", "B", "u1", "v1"),
-                DyadRRR("D", "C", "link1", "D0", "link2", branch="assembly2"),
-                _POINT,
-            ),
-            traced=("P",),
-        ),
-        # Driven at D0D: D turns with the input, and the coupler ABC, held by the crank, the
-        # rocker and the link CD, is a triad.
-        output=Plan(
-            (
-                *_FOURBAR[:2],
-                Fixed("D0", "D0"),
-                Crank("D", "D0", "link2"),
-                Triad(
-                    ("A", "B", "C"),
-                    ("A0", "B0", "D"),
-                    ("crank", "rocker", "link1"),
-                    "coupler",
-                    "u1",
-                    "v1",
-                ),
-                _POINT,
-            ),
-            traced=("P",),
-        ),
-    )
+    plan: ClassVar[Plan] = PlanByInput(**PLANS)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         # The base checks the numbers; the word that chooses the plan is checked here, first.
         if not isinstance(self.input, str) or self.input not in INPUTS:
-            raise InvalidMechanism(f"input: must be 'crank' or 'output', got {self.input!r}")
+            raise InvalidMechanism(
+                f"input: must be one of {', '.join(INPUTS)} (where the motor sits), "
+                f"got {self.input!r}"
+            )
         super().__post_init__()
 
     @property
     def input_link(self) -> tuple[str, str]:
-        return ("A0", "A") if self.input == "crank" else ("D0", "D")
+        """The driven link as (its pivot or hinge, its far joint)."""
+        vertex, _, _, joint, _ = DRIVEN_ANGLES[self.input]
+        return (vertex, joint)
+
+    def _input_error(self, motion: Motion) -> Array:
+        vertex, origin, toward, joint, arm = DRIVEN_ANGLES[self.input]
+        at = motion.positions
+        if origin:
+            ref = at[toward] - at[origin]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                ref = ref / plane.norm(ref)[..., None]
+        else:
+            ref = np.array([1.0, 0.0])
+        length = np.asarray(getattr(self, arm), dtype=float)[..., None, None]
+        c, s = np.cos(motion.input)[..., None], np.sin(motion.input)[..., None]
+        turned = np.concatenate(
+            (c * ref[..., :1] - s * ref[..., 1:], s * ref[..., :1] + c * ref[..., 1:]), -1
+        )
+        return plane.norm(at[joint] - at[vertex] - length * turned)
 
 
 # --------------------------------------------------------------------------------------------

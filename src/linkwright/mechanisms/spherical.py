@@ -28,6 +28,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.engine import Fixed, Motion, Plan, SphereCrank, SphereDyad, SphereRigid
+from linkwright.engine.hinge_steps import SphereHinge
+from linkwright.engine.hinge_triad_steps import SphereBodyHingeTriad, SphereLegHingeTriad
 from linkwright.engine.triad_steps import SphereTriad
 from linkwright.geometry import sphere
 from linkwright.mechanisms.base import (
@@ -259,6 +261,103 @@ class SphericalSixBar(Mechanism):
         }
 
 
+_P001_FRAME = (Fixed("A", "A"), Fixed("D", "D"), Fixed("G", "G"))
+# E at arc a6 from C, turned by π − σ from the great circle C→B (eq. 3); F closes the dyad EFG.
+_P001_E = SphereRigid("E", "C", "B", "a6", "turn")
+_P001_F = SphereDyad("F", "E", "a7", "G", "a8", branch="assembly2")
+# The triads list C first, with ``sense = -1``: their poses in the order of θ1 = ∠BAD
+# (left-handed, eq. 5).
+
+SPHERE_PLANS: dict[str, Plan] = {
+    "AB": Plan(
+        (
+            *_P001_FRAME,
+            # Eq. 5 turns B from D towards +x: left-handed about +OA, hence ratio −1.
+            SphereCrank("B", "A", "a2", ref="D", ratio=-1.0),
+            SphereDyad("C", "B", "a3", "D", "a4", branch="assembly"),
+            _P001_E,
+            _P001_F,
+        ),
+        traced=("E", "F"),
+    ),
+    "FG": Plan(
+        (
+            *_P001_FRAME,
+            SphereCrank("F", "G", "a8", ref="away"),
+            SphereTriad(
+                ("C", "B", "E"),
+                ("D", "A", "F"),
+                ("a4", "a2", "a7"),
+                "a3",
+                "a6",
+                "turn",
+                sense=-1.0,
+            ),
+        ),
+        traced=("E", "F"),
+    ),
+    # The four-bar from its rocker: θ turns C about +OD from the great circle D→A.
+    "DC": Plan(
+        (
+            *_P001_FRAME,
+            SphereCrank("C", "D", "a4", ref="A"),
+            SphereDyad("B", "C", "a3", "A", "a2", branch="assembly"),
+            _P001_E,
+            _P001_F,
+        ),
+        traced=("E", "F"),
+    ),
+    # Driven hinges, θ the angle at the joint, right-handed about its axis: at B from the great
+    # circle B→A to B→C, at C from C→D to C→B (the four-bar's loop: a hinge step), at E from
+    # E→C to E→F (EF turning on the coupler) and at F from F→G to F→E (triads).
+    "B": Plan(
+        (*_P001_FRAME, SphereHinge("B", "C", "D", "a4", "A", "a3", "a2"), _P001_E, _P001_F),
+        traced=("E", "F"),
+    ),
+    "C": Plan(
+        (*_P001_FRAME, SphereHinge("C", "B", "A", "a2", "D", "a3", "a4"), _P001_E, _P001_F),
+        traced=("E", "F"),
+    ),
+    "E": Plan(
+        (
+            *_P001_FRAME,
+            SphereBodyHingeTriad(
+                ("C", "B", "F", "E"),
+                ("D", "A", "G"),
+                ("a4", "a2", "a8"),
+                "a3",
+                "a6",
+                "turn",
+                "a7",
+                sense=-1.0,
+            ),
+        ),
+        traced=("E", "F"),
+    ),
+    "F": Plan(
+        (
+            *_P001_FRAME,
+            SphereLegHingeTriad(
+                ("C", "B", "E", "F"),
+                ("D", "A", "G"),
+                ("a4", "a2"),
+                "a3",
+                "a6",
+                "turn",
+                "a7",
+                "a8",
+                sense=-1.0,
+            ),
+        ),
+        traced=("E", "F"),
+    ),
+}
+"""Paper 001's six-bar driven at each of its joints: at its links from the frame (AB, the
+paper's; FG, the paper's; DC) and at each moving hinge (B, C, E, F)."""
+
+SPHERE_INPUTS = tuple(SPHERE_PLANS)
+
+
 @family_dataclass
 class SphericalStephenson3(Mechanism):
     """The Stephenson-III spherical six-bar of paper 001 (Zong et al.); all arcs in radians.
@@ -280,6 +379,15 @@ class SphericalStephenson3(Mechanism):
     (:class:`~linkwright.engine.triad_steps.SphereTriad`) whose branch is ``pose``, 0 to 7, the
     index of the configuration in the order of paper 001's θ1 = ∠BAD at each input, from −180°
     to 180°. Joints: A, D, G, B, C, E, F (traced: E).
+
+    A motor may sit anywhere else too (:data:`SPHERE_PLANS`): ``input = "DC"`` turns C about
+    +OD from the great circle D→A (the four-bar from its rocker, ``assembly`` then the sign of
+    (C × A)·B); ``"B"`` and ``"C"`` drive the hinges of the four-bar's loop (a driven hinge,
+    ``pose`` 0 or 1); ``"E"`` turns EF on the coupler and ``"F"`` drives the hinge between EF
+    and FG, each a spherical triad that changes with the input
+    (:mod:`~linkwright.engine.hinge_triad_steps`, ``pose`` 0 to 7). At a hinge θ is the angle
+    about its axis (right-handed) from one great circle to the other: at B from B→A to B→C, at
+    C from C→D to C→B, at E from E→C to E→F, at F from F→G to F→E.
 
     Examples
     --------
@@ -323,45 +431,15 @@ class SphericalStephenson3(Mechanism):
     derived_points: ClassVar[frozenset[str]] = frozenset({"A", "D", "G", "away"})
     reported_joints: ClassVar[tuple[str, ...]] = ("A", "D", "G", "B", "C", "E", "F")
     traced_joint: ClassVar[str] = "E"
-    plan: ClassVar[Plan] = PlanByInput(  # type: ignore[assignment]
-        AB=Plan(
-            (
-                Fixed("A", "A"),
-                Fixed("D", "D"),
-                Fixed("G", "G"),
-                # Eq. 5 turns B from D towards +x: left-handed about +OA, hence ratio −1.
-                SphereCrank("B", "A", "a2", ref="D", ratio=-1.0),
-                SphereDyad("C", "B", "a3", "D", "a4", branch="assembly"),
-                SphereRigid("E", "C", "B", "a6", "turn"),
-                SphereDyad("F", "E", "a7", "G", "a8", branch="assembly2"),
-            ),
-            traced=("E", "F"),
-        ),
-        FG=Plan(
-            (
-                Fixed("A", "A"),
-                Fixed("D", "D"),
-                Fixed("G", "G"),
-                SphereCrank("F", "G", "a8", ref="away"),
-                # E at arc a6 from C, turned by π − σ from the great circle C→B (eq. 3).
-                SphereTriad(
-                    ("C", "B", "E"),
-                    ("D", "A", "F"),
-                    ("a4", "a2", "a7"),
-                    "a3",
-                    "a6",
-                    "turn",
-                    sense=-1.0,  # poses in the order of θ1 = ∠BAD, left-handed (eq. 5)
-                ),
-            ),
-            traced=("E", "F"),
-        ),
-    )
+    plan: ClassVar[Plan] = PlanByInput(**SPHERE_PLANS)  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         # The base checks the numbers; the word that chooses the plan is checked here, first.
-        if not isinstance(self.input, str) or self.input not in ("AB", "FG"):
-            raise InvalidMechanism(f"input: must be 'AB' or 'FG', got {self.input!r}")
+        if not isinstance(self.input, str) or self.input not in SPHERE_INPUTS:
+            raise InvalidMechanism(
+                f"input: must be one of {', '.join(SPHERE_INPUTS)} (where the motor sits), "
+                f"got {self.input!r}"
+            )
         super().__post_init__()
         if np.any(np.asarray(self.a1) + np.asarray(self.a9) >= 2 * np.pi):
             raise InvalidMechanism("a1 + a9: G would wrap past A (a1 + a9 ≥ 360°)")
@@ -393,7 +471,9 @@ class SphericalStephenson3(Mechanism):
     @property
     def driven(self) -> tuple[str, str]:
         """(pivot, joint) of the driven link."""
-        return ("A", "B") if self.input == "AB" else ("G", "F")
+        return {"AB": ("A", "B"), "FG": ("G", "F"), "DC": ("D", "C")}.get(
+            self.input, (self.input, self.input)
+        )
 
     def residuals(self, motion: Motion) -> dict[str, Array]:
         """Each constraint's error at every sample (radians of arc, or chord for E)."""

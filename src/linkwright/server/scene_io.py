@@ -27,6 +27,8 @@ from linkwright.io import (
 )
 from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS
 from linkwright.mechanisms import registry
+from linkwright.mechanisms.spherical import SPHERE_INPUTS
+from linkwright.mechanisms.stephenson3_inputs import INPUTS
 from linkwright.server.limits import check_document
 
 __all__ = [
@@ -169,9 +171,9 @@ def _spec_fields(prefix: str, label: str, kind: str, value: Any) -> list[dict[st
             _field(f"{prefix}.angle", f"{label} angle", value["angle"], "angle", "°"),
         ]
     if kind == "stephenson_input":
-        return [_field(prefix, label, value, "choice", choices=["crank", "output"])]
+        return [_field(prefix, label, value, "choice", choices=list(INPUTS))]
     if kind == "spherical_input":
-        return [_field(prefix, label, value, "choice", choices=["AB", "FG"])]
+        return [_field(prefix, label, value, "choice", choices=list(SPHERE_INPUTS))]
     return []  # names, joint references, the space: not numbers to edit
 
 

@@ -28,6 +28,8 @@ from pydantic import WithJsonSchema
 
 from linkwright.io import FAMILY_SPECS, document_to_dict, load_example
 from linkwright.io.documents import JOINT_SPECS, SPHERE_JOINT_SPECS, WORKING_RANGE, FieldSpec
+from linkwright.mechanisms.spherical import SPHERE_INPUTS
+from linkwright.mechanisms.stephenson3_inputs import INPUTS
 from linkwright.server.limits import DOCUMENT_LIST, TEXT, TITLE
 
 __all__ = ["DocumentBody", "document_examples", "document_schema", "examples"]
@@ -80,8 +82,8 @@ def _kinds() -> dict[str, dict[str, Any]]:
         "offset_arc": offset_arc,
         "arc_point": table({"arc": offset_arc, "angle": angle}, ["arc"]),
         "arc_pivot": table({"arc": arc, "angle": angle}, ["arc"]),
-        "stephenson_input": {"enum": ["crank", "output"]},
-        "spherical_input": {"enum": ["AB", "FG"]},
+        "stephenson_input": {"enum": list(INPUTS)},
+        "spherical_input": {"enum": list(SPHERE_INPUTS)},
         "space": {"enum": ["plane", "sphere"]},
         "joint": joint,
         "names": {
