@@ -119,7 +119,7 @@ def test_sphere_joint_schema_covers_the_sphere_joint_classes():
     assert (
         set(SPHERE_JOINT_SPECS)
         == set(SPHERE_JOINT_TYPES)
-        == {"fixed", "crank", "rrr", "rigid", "hinge", "triad"}
+        == {"fixed", "crank", "rrr", "rigid", "hinge", "triad", "hinge-triad", "turning-triad"}
     )
     for kind, specs in SPHERE_JOINT_SPECS.items():
         names = {f.name for f in dataclasses.fields(SPHERE_JOINT_TYPES[kind])} - {"name"}

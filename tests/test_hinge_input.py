@@ -285,9 +285,12 @@ def test_every_spherical_pose_is_the_crank_driven_linkages(frame, crank, coupler
                 space="sphere",
             )
             reached = solve(driven, [crank_angle[k]], order=0).positions["B"][0]
-            # The reference's dyad meets its limit where the angle at B is 0 or π.
+            # The reference's dyad meets its limit where the angle at B is 0 or π: there B
+            # moves like 1/sin of that angle per radian of crank, and the crank angle read off
+            # A carries its rounding (over sin of arcs down to 0.2), times links' ratios of up
+            # to 7: 6.7e-13/sin was seen, so 1e-11/sin.
             sine = abs(np.sin(theta[ok][k] + phase))
-            assert np.linalg.norm(reached - b[k]) <= 1e-9 + 1e-14 / max(sine, 1e-300)
+            assert np.linalg.norm(reached - b[k]) <= 1e-9 + 1e-11 / max(sine, 1e-300)
 
 
 def test_spherical_limits_are_the_spherical_law_of_cosines():

@@ -413,7 +413,9 @@ def test_params_plan_and_joints():
     listed = Linkage(joints=[FixedJoint("O", [0, 0]), CrankJoint("A", "O", 1)], traced="O")
     assert isinstance(listed.joints, tuple) and listed.traced == ("O",)
     assert mech == fourbar_linkage([0, 0], [4, 0], 1, 5, 3.5, u=2, v=1, assembly=-1)
-    assert set(JOINT_TYPES) == {"fixed", "crank", "rrr", "rrp", "rigid", "hinge", "triad"}
+    assert set(JOINT_TYPES) == {
+        "fixed", "crank", "rrr", "rrp", "rigid", "hinge", "triad", "hinge-triad", "turning-triad"
+    }  # fmt: skip
 
 
 def test_with_assembly_and_configurations():

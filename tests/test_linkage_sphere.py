@@ -129,12 +129,14 @@ def change_point(a1: float, a2: float, a3: float, a4: float) -> bool:
     return min(abs(f - d) for f in frame for d in dyad) < 1e-9
 
 
-def assert_same_motion(a, b, joints, tol: float = 1e-14) -> None:
+def assert_same_motion(a, b, joints, tol: float = 1e-13) -> None:
     """Two constructions of one linkage give one motion.
 
-    Their rounding differs, and it is amplified in two ways: an ulp of input moves a joint by
-    its speed times that ulp, and towards a limit position a dyad's joint moves like the square
-    root of its margin (sin² of its angle), so an ulp there grows like 1/√margin. Each sample is
+    Their rounding differs (by up to about 150 ulps of a unit vector where the trigonometric
+    forms and the cross products each round: 3.1e-14 was seen), and it is amplified in two
+    ways: an ulp of input moves a joint by its speed times that ulp, and towards a limit
+    position a dyad's joint moves like the square root of its margin (sin² of its angle), so an
+    ulp there grows like 1/√margin. Each sample is
     held to ``tol·(1 + speed + 0.01/√margin)``. Within 1e-12 of a limit either may assemble and
     the other not; derivatives, which grow like 1/margin, are compared where the margin is above
     1e-6.

@@ -194,8 +194,17 @@ def _doubleslider_lines(m: dict[str, Any]) -> None:
 
 
 def _linkage_traced(m: dict[str, Any]) -> None:
-    # A driven hinge places its far joint too, a triad its j2 and j3: each a joint to trace.
-    placed = tuple(j[key] for j in m["joints"] for key in ("name", "far", "j2", "j3") if key in j)
+    # A driven hinge places its far joint too, a triad its j2 and j3 (and a hinge): each a
+    # joint to trace, as the joint spec classes say (mechanisms.joints.PLACES).
+    from linkwright.mechanisms.joints import PLACES, SPACES
+
+    kinds = SPACES.get(m.get("space", "plane"), SPACES["plane"])
+    placed = tuple(
+        j[key]
+        for j in m["joints"]
+        for key in ("name", *PLACES.get(kinds.get(j.get("type", "")), ()))  # type: ignore[arg-type]
+        if key in j
+    )
     for i, name in enumerate(m["traced"]):
         if name not in placed:
             raise DocumentError(f"mechanism.traced[{i}]", unknown_choice("joint", name, placed))
@@ -242,6 +251,21 @@ def _triad_places(length: str) -> tuple[FieldSpec, ...]:
         FieldSpec("r2", length),
         FieldSpec("p3", "joint"),
         FieldSpec("r3", length),
+    )
+
+
+def _hinge_triad_places(length: str) -> tuple[FieldSpec, ...]:
+    """A triad driven at a hinge: J1 (its name), j2, j3 and the hinge, J1 and J2 held by r1 from
+    p1 and r2 from p2, and the third leg's anchor p3."""
+    return (
+        FieldSpec("j2", "joint"),
+        FieldSpec("j3", "joint"),
+        FieldSpec("hinge", "joint"),
+        FieldSpec("p1", "joint"),
+        FieldSpec("r1", length),
+        FieldSpec("p2", "joint"),
+        FieldSpec("r2", length),
+        FieldSpec("p3", "joint"),
     )
 
 
@@ -292,6 +316,28 @@ JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
         FieldSpec("v", "number", default=0.0),
         FieldSpec("pose", "pose", default=0),
     ),
+    # Triads driven at a hinge of their loop (mechanisms.hinge_joints): they place the hinge
+    # too, the linkage's input in place of a crank.
+    "hinge-triad": _hinge_triad_places("length")
+    + (
+        FieldSpec("a", "length"),
+        FieldSpec("b", "length"),
+        FieldSpec("side", "length"),
+        FieldSpec("u", "number", default=0.0),
+        FieldSpec("v", "number", default=0.0),
+        FieldSpec("phase", "angle_deg", default=0.0),
+        FieldSpec("pose", "pose", default=0),
+    ),
+    "turning-triad": _hinge_triad_places("length")
+    + (
+        FieldSpec("r3", "length"),
+        FieldSpec("side", "length"),
+        FieldSpec("hu", "number"),
+        FieldSpec("hv", "number"),
+        FieldSpec("arm", "length"),
+        FieldSpec("phase", "angle_deg", default=0.0),
+        FieldSpec("pose", "pose", default=0),
+    ),
 }
 """A planar ``linkage`` joint's fields by its ``type`` (besides ``name`` and ``type``), in
 document order; the names are those of the joint spec classes of
@@ -339,6 +385,26 @@ SPHERE_JOINT_SPECS: dict[str, tuple[FieldSpec, ...]] = {
         FieldSpec("side", "arc"),
         FieldSpec("arc", "offset_arc", default=0.0),
         FieldSpec("angle", "angle_deg", default=0.0),
+        FieldSpec("pose", "pose", default=0),
+    ),
+    "hinge-triad": _hinge_triad_places("arc")
+    + (
+        FieldSpec("a", "arc"),
+        FieldSpec("b", "arc"),
+        FieldSpec("side", "arc"),
+        FieldSpec("arc", "offset_arc", default=0.0),
+        FieldSpec("angle", "angle_deg", default=0.0),
+        FieldSpec("phase", "angle_deg", default=0.0),
+        FieldSpec("pose", "pose", default=0),
+    ),
+    "turning-triad": _hinge_triad_places("arc")
+    + (
+        FieldSpec("r3", "arc"),
+        FieldSpec("side", "arc"),
+        FieldSpec("harc", "arc"),
+        FieldSpec("hangle", "angle_deg"),
+        FieldSpec("arm", "arc"),
+        FieldSpec("phase", "angle_deg", default=0.0),
         FieldSpec("pose", "pose", default=0),
     ),
 }

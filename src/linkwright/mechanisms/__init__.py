@@ -12,6 +12,12 @@ from linkwright.mechanisms.base import (
     running_circuit,
     solve,
 )
+from linkwright.mechanisms.hinge_joints import (
+    HingeTriadJoint,
+    SphereHingeTriadJoint,
+    SphereTurningTriadJoint,
+    TurningTriadJoint,
+)
 from linkwright.mechanisms.linkage import (
     CrankJoint,
     DyadJoint,
@@ -47,6 +53,7 @@ __all__ = [
     "FourBar",
     "GearedFiveBar",
     "HingeJoint",
+    "HingeTriadJoint",
     "InvalidLinkage",
     "InvalidMechanism",
     "Linkage",
@@ -55,14 +62,17 @@ __all__ = [
     "SliderCrank",
     "SliderJoint",
     "SphereCrankJoint",
+    "SphereHingeTriadJoint",
     "SphereRigidJoint",
     "SphereTriadJoint",
+    "SphereTurningTriadJoint",
     "SphericalFourBar",
     "SphericalSixBar",
     "SphericalStephenson3",
     "Stephenson1",
     "Stephenson3",
     "TriadJoint",
+    "TurningTriadJoint",
     "Watt1",
     "Watt2",
     "circuit",

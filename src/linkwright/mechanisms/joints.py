@@ -24,6 +24,9 @@ TriadJoint      ``triad``     the three joints of a ternary link at once (a tria
                               ``v``) in the frame of J1→J2; ``pose`` picks one of its poses
 ==============  ============  ====================================================================
 
+A triad driven at a hinge of its own loop is written ``hinge-triad`` (the hinge in its third
+leg) or ``turning-triad`` (a link turning on its ternary link): :mod:`.hinge_joints`.
+
 On the sphere (``space = "sphere"``) every joint is a revolute whose axis passes through the
 centre O of the unit sphere; a joint is the unit vector along its axis and a link's length is
 the arc (central angle, radians) between its joints' axes:
@@ -71,14 +74,22 @@ number each field must be (:func:`numeric_kinds`) and the linkage's error
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from linkwright.geometry import sphere
 from linkwright.mechanisms.base import InvalidMechanism
+from linkwright.mechanisms.hinge_joints import (
+    HingeTriadJoint,
+    SphereHingeTriadJoint,
+    SphereTurningTriadJoint,
+    TurningTriadJoint,
+)
+from linkwright.mechanisms.joint_base import JointSpec as _Spec
+from linkwright.mechanisms.joint_base import TriadSpec as _TriadSpec
 
 __all__ = [
     "ALL_SPECS",
@@ -143,33 +154,6 @@ class InvalidLinkage(InvalidMechanism):
 # --------------------------------------------------------------------------------------------
 # Joint specs
 # --------------------------------------------------------------------------------------------
-
-
-class _Spec:
-    """Equality by value, arrays included: two specs are equal when every field is.
-
-    The dataclass default compares field tuples with ``==``, which for a point (an array of
-    two) has no single truth value; comparing the arrays whole makes linkages comparable.
-    """
-
-    # Every spec is a dataclass: this tells the type checker so (dataclasses sets it).
-    __dataclass_fields__: ClassVar[dict[str, Any]]
-
-    def __eq__(self, other: object) -> bool:
-        if type(other) is not type(self):
-            return NotImplemented
-        return all(_same_value(getattr(self, f.name), getattr(other, f.name)) for f in fields(self))
-
-    __hash__ = None  # type: ignore[assignment]  # specs may hold arrays
-
-
-def _same_value(a: Any, b: Any) -> bool:
-    if isinstance(a, str) or isinstance(b, str):
-        return bool(a == b)
-    try:
-        return bool(np.array_equal(np.asarray(a), np.asarray(b)))
-    except (TypeError, ValueError):
-        return bool(a == b)
 
 
 @dataclass(frozen=True, eq=False)
@@ -500,28 +484,6 @@ class SphereRigidJoint(_Spec):
         return (self.origin, self.toward)
 
 
-class _TriadSpec(_Spec):
-    """What the planar and the spherical triad share: the joints it places and reads."""
-
-    name: str
-    j2: str
-    j3: str
-    p1: str
-    p2: str
-    p3: str
-
-    type: ClassVar[str] = "triad"
-
-    @property
-    def parents(self) -> tuple[str, ...]:
-        return (self.p1, self.p2, self.p3)
-
-    @property
-    def placed(self) -> tuple[str, ...]:
-        """The joints it places: J1 (its name), J2, J3."""
-        return (self.name, self.j2, self.j3)
-
-
 @dataclass(frozen=True, eq=False)
 class TriadJoint(_TriadSpec):
     """A ternary link J1 J2 J3 (``name``, ``j2``, ``j3``) held by three binary links: J_k at
@@ -638,12 +600,26 @@ Joint = (
     | HingeJoint
     | TriadJoint
     | SphereTriadJoint
+    | HingeTriadJoint
+    | SphereHingeTriadJoint
+    | TurningTriadJoint
+    | SphereTurningTriadJoint
 )
 """Any joint spec."""
 
 JOINT_TYPES: dict[str, type[Joint]] = {
     cls.type: cls
-    for cls in (FixedJoint, CrankJoint, DyadJoint, SliderJoint, RigidJoint, HingeJoint, TriadJoint)
+    for cls in (
+        FixedJoint,
+        CrankJoint,
+        DyadJoint,
+        SliderJoint,
+        RigidJoint,
+        HingeJoint,
+        TriadJoint,
+        HingeTriadJoint,
+        TurningTriadJoint,
+    )
 }
 """Document ``type`` → joint spec class, in the plane."""
 
@@ -656,6 +632,8 @@ SPHERE_JOINT_TYPES: dict[str, type[Joint]] = {
         SphereRigidJoint,
         HingeJoint,
         SphereTriadJoint,
+        SphereHingeTriadJoint,
+        SphereTurningTriadJoint,
     )
 }
 """Document ``type`` → joint spec class, on the sphere (no ``rrp``: see the module notes)."""
@@ -663,7 +641,14 @@ SPHERE_JOINT_TYPES: dict[str, type[Joint]] = {
 SPACES: dict[str, dict[str, type[Joint]]] = {"plane": JOINT_TYPES, "sphere": SPHERE_JOINT_TYPES}
 """A linkage's ``space`` → the joint spec classes it is built from."""
 
-ALL_SPECS = (*JOINT_TYPES.values(), SphereCrankJoint, SphereRigidJoint, SphereTriadJoint)
+ALL_SPECS = (
+    *JOINT_TYPES.values(),
+    SphereCrankJoint,
+    SphereRigidJoint,
+    SphereTriadJoint,
+    SphereHingeTriadJoint,
+    SphereTurningTriadJoint,
+)
 
 # What each numeric field must be; names are the dataclass fields. A DyadJoint's lengths are
 # arcs on the sphere, and a FixedJoint's place an axis: see numeric_kinds.
@@ -700,6 +685,50 @@ _NUMERIC: dict[type, dict[str, str]] = {
         "angle": "number",
         "pose": "sphere-pose",
     },
+    HingeTriadJoint: {
+        "r1": "length",
+        "r2": "length",
+        "a": "length",
+        "b": "length",
+        "side": "length",
+        "u": "number",
+        "v": "number",
+        "phase": "number",
+        "pose": "pose",
+    },
+    SphereHingeTriadJoint: {
+        "r1": "arc",
+        "r2": "arc",
+        "a": "arc",
+        "b": "arc",
+        "side": "arc",
+        "arc": "offset",
+        "angle": "number",
+        "phase": "number",
+        "pose": "sphere-pose",
+    },
+    TurningTriadJoint: {
+        "r1": "length",
+        "r2": "length",
+        "r3": "length",
+        "side": "length",
+        "hu": "number",
+        "hv": "number",
+        "arm": "length",
+        "phase": "number",
+        "pose": "pose",
+    },
+    SphereTurningTriadJoint: {
+        "r1": "arc",
+        "r2": "arc",
+        "r3": "arc",
+        "side": "arc",
+        "harc": "arc",
+        "hangle": "number",
+        "arm": "arc",
+        "phase": "number",
+        "pose": "sphere-pose",
+    },
 }
 _ON_SPHERE: dict[str, str] = {"point": "axis", "length": "arc"}
 # The fields of each spec that name a parent joint (validation checks each is placed before).
@@ -714,12 +743,20 @@ REFERENCES: dict[type, tuple[str, ...]] = {
     SphereRigidJoint: ("origin", "toward"),
     TriadJoint: ("p1", "p2", "p3"),
     SphereTriadJoint: ("p1", "p2", "p3"),
+    HingeTriadJoint: ("p1", "p2", "p3"),
+    SphereHingeTriadJoint: ("p1", "p2", "p3"),
+    TurningTriadJoint: ("p1", "p2", "p3"),
+    SphereTurningTriadJoint: ("p1", "p2", "p3"),
 }
 # The fields of a spec that name the further joints it places (each a new name).
 PLACES: dict[type, tuple[str, ...]] = {
     HingeJoint: ("far",),
     TriadJoint: ("j2", "j3"),
     SphereTriadJoint: ("j2", "j3"),
+    HingeTriadJoint: ("j2", "j3", "hinge"),
+    SphereHingeTriadJoint: ("j2", "j3", "hinge"),
+    TurningTriadJoint: ("j2", "j3", "hinge"),
+    SphereTurningTriadJoint: ("j2", "j3", "hinge"),
 }
 
 

@@ -19,6 +19,12 @@ from numpy.typing import NDArray
 from linkwright.engine.sphere_triad import MAX_POSES as SPHERE_POSES
 from linkwright.engine.triad import MAX_POSES as PLANE_POSES
 from linkwright.geometry import sphere
+from linkwright.mechanisms.hinge_joints import (
+    HingeTriadJoint,
+    SphereHingeTriadJoint,
+    SphereTurningTriadJoint,
+    TurningTriadJoint,
+)
 from linkwright.mechanisms.joints import (
     CrankJoint,
     DyadJoint,
@@ -134,6 +140,8 @@ def wrong_space(joint: Joint, space: str) -> str:
             CrankJoint: "SphereCrankJoint (an arc, and the fixed joint its angle starts towards)",
             RigidJoint: "SphereRigidJoint (an arc and an angle from the link)",
             TriadJoint: "SphereTriadJoint (arcs, and its third joint by an arc and an angle)",
+            HingeTriadJoint: "SphereHingeTriadJoint (arcs, and the body as SphereTriadJoint's)",
+            TurningTriadJoint: "SphereTurningTriadJoint (arcs; the hinge by an arc and an angle)",
         }[type(joint)]
         return (
             f"joint {name!r} is a planar {type(joint).__name__}, but this linkage is spherical: "
@@ -255,6 +263,14 @@ def check_bodies(joints: tuple[Joint, ...]) -> None:
             # Three binary links and the ternary link (ground anchors do not join them: each
             # binary turns about its anchor).
             clusters += [{j.p1, j.name}, {j.p2, j.j2}, {j.p3, j.j3}, {j.name, j.j2, j.j3}]
+        elif isinstance(j, HingeTriadJoint | SphereHingeTriadJoint):
+            # The third leg is two links, p3–H and H–J3.
+            clusters += [{j.p1, j.name}, {j.p2, j.j2}, {j.p3, j.hinge}, {j.hinge, j.j3}]
+            clusters.append({j.name, j.j2, j.j3})
+        elif isinstance(j, TurningTriadJoint | SphereTurningTriadJoint):
+            # The ternary link carries H; the link H–J3 turns on it.
+            clusters += [{j.p1, j.name}, {j.p2, j.j2}, {j.p3, j.j3}, {j.hinge, j.j3}]
+            clusters.append({j.name, j.j2, j.hinge})
         elif isinstance(j, SliderJoint):
             # The guide keeps its direction, so only a grounded rod on a grounded guide is rigid
             # with anything beyond the rod itself.
@@ -299,6 +315,18 @@ def _construction(j: Joint, space: str) -> tuple[tuple[Any, ...], ...]:
         return (("triad", j.p1, j.r1, j.p2, j.r2, j.p3, j.r3, j.side, j.u, j.v, j.pose),)
     if isinstance(j, SphereTriadJoint):
         return (("triad", j.p1, j.r1, j.p2, j.r2, j.p3, j.r3, j.side, j.arc, j.angle, j.pose),)
+    if isinstance(j, HingeTriadJoint):
+        body: tuple[Any, ...] = (j.side, j.u, j.v)
+        return (("hinge-triad", j.p1, j.r1, j.p2, j.r2, j.p3, j.a, j.b, *body, j.phase, j.pose),)
+    if isinstance(j, SphereHingeTriadJoint):
+        body = (j.side, j.arc, j.angle)
+        return (("hinge-triad", j.p1, j.r1, j.p2, j.r2, j.p3, j.a, j.b, *body, j.phase, j.pose),)
+    if isinstance(j, TurningTriadJoint):
+        body = (j.side, j.hu, j.hv, j.arm)
+        return (("turning", j.p1, j.r1, j.p2, j.r2, j.p3, j.r3, *body, j.phase, j.pose),)
+    if isinstance(j, SphereTurningTriadJoint):
+        body = (j.side, j.harc, j.hangle, j.arm)
+        return (("turning", j.p1, j.r1, j.p2, j.r2, j.p3, j.r3, *body, j.phase, j.pose),)
     if isinstance(j, SphereRigidJoint):
         return (("rigid", j.origin, j.toward, j.arc, j.angle),)
     return (("rigid", j.origin, j.toward, j.u, j.v),)
