@@ -87,15 +87,10 @@ def _third(t: TriadSolution) -> tuple[Track, Track]:
     return y, x
 
 
-class _LegHinge:
-    """What the planar and the spherical leg hinge share: their names, links and sentences."""
+class _Hinged:
+    """A triad step that also places its driven hinge, the last of its joints."""
 
     joints: tuple[str, str, str, str]
-    anchors: tuple[str, str, str]
-    lengths: tuple[Param, Param]
-    a: Param
-    b: Param
-    phase: Param
 
     @property
     def hinge(self) -> str:
@@ -104,6 +99,17 @@ class _LegHinge:
     @property
     def title(self) -> str:
         return f"triad {''.join(self.joints[:3])} driven at {self.hinge}"
+
+
+class _LegHinge(_Hinged):
+    """What the planar and the spherical leg hinge share: their names, links and sentences."""
+
+    joints: tuple[str, str, str, str]
+    anchors: tuple[str, str, str]
+    lengths: tuple[Param, Param]
+    a: Param
+    b: Param
+    phase: Param
 
     def links(self) -> tuple[tuple[str, str], ...]:
         """The first two legs, the hinge's two links and the ternary's three sides."""
@@ -128,6 +134,13 @@ class _LegHinge:
 
     def _angle(self, ctx: Context) -> tuple[Array, Array, Array]:
         return ctx.scalar(self.phase) + ctx.theta, ctx.scalar(self.a), ctx.scalar(self.b)
+
+    def at_limit(self) -> str:
+        j = "".join(self.joints[:3])
+        return (
+            f"triad {j} driven at {self.hinge}: two poses merge (the ternary link {j} cannot go "
+            "on this way in either)"
+        )
 
 
 @dataclass(frozen=True)
@@ -225,13 +238,6 @@ class LegHingeTriad(_LegHinge, PlaneTriadKind):
         )
         worst: Array = np.maximum.reduce(np.broadcast_arrays(*errors))
         return worst
-
-    def at_limit(self) -> str:
-        j = "".join(self.joints[:3])
-        return (
-            f"triad {j} driven at {self.hinge}: two poses merge (the ternary link {j} cannot go "
-            "on this way in either)"
-        )
 
 
 @dataclass(frozen=True)
@@ -343,16 +349,49 @@ class SphereLegHingeTriad(_LegHinge, SphereTriadKind):
         worst: Array = np.maximum.reduce(np.broadcast_arrays(*errors))
         return worst
 
+
+class _BodyHinge(_Hinged):
+    """What the planar and the spherical body hinge share: their links and sentences (``link``
+    names a binary link in a sentence: "link" or "arc")."""
+
+    anchors: tuple[str, str, str]
+    link: str
+
+    def links(self) -> tuple[tuple[str, str], ...]:
+        """The three legs, the turning link H–J3 and the ternary's sides J1 J2 H."""
+        j, k, h = self.joints, self.anchors, self.hinge
+        return (
+            (k[0], j[0]),
+            (k[1], j[1]),
+            (k[2], j[2]),
+            (h, j[2]),
+            (j[0], j[1]),
+            (j[1], h),
+            (j[0], h),
+        )
+
+    def plates(self) -> tuple[tuple[str, ...], ...]:
+        return ((self.joints[0], self.joints[1], self.hinge),)
+
+    def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
+        j, k, h = self.joints, self.anchors, self.hinge
+        return (
+            f"the ternary link {j[0]}{j[1]}{h}, with the {self.link} {h}{j[2]} turned to the "
+            f"driven angle, cannot be held by its {self.link}s {k[0]}{j[0]}, {k[1]}{j[1]} and "
+            f"{k[2]}{j[2]}: the triad has no real pose"
+        )
+
     def at_limit(self) -> str:
         j = "".join(self.joints[:3])
         return (
-            f"triad {j} driven at {self.hinge}: two poses merge (the ternary link {j} cannot go "
-            "on this way in either)"
+            f"triad {j} driven at {self.hinge}: two poses merge (the ternary link, with "
+            f"{self.hinge}{self.joints[2]} held at the driven angle, cannot go on this way in "
+            "either)"
         )
 
 
 @dataclass(frozen=True)
-class BodyHingeTriad(PlaneTriadKind):
+class BodyHingeTriad(_BodyHinge, PlaneTriadKind):
     """A planar triad whose ternary link carries the driven hinge H: J1 J2 J3 and H, where H
     sits at (``hu``, ``hv``) in the body's frame (origin J1, x along J1→J2, v to the left) and
     J3 at ``arm`` from H, at the angle ``phase + θ`` from the body's x axis. Leg k, from the
@@ -392,33 +431,11 @@ class BodyHingeTriad(PlaneTriadKind):
     phase: Param = 0.0
     pose: str = "pose"
 
-    @property
-    def hinge(self) -> str:
-        return self.joints[3]
+    link = "link"
 
     @property
     def body(self) -> tuple[Param, Param, Param]:
         return (self.side, self.hu, self.hv)
-
-    @property
-    def title(self) -> str:
-        return f"triad {''.join(self.joints[:3])} driven at {self.hinge}"
-
-    def links(self) -> tuple[tuple[str, str], ...]:
-        """The three legs, the turning link H–J3 and the ternary's sides J1 J2 H."""
-        j, k, h = self.joints, self.anchors, self.hinge
-        return (
-            (k[0], j[0]),
-            (k[1], j[1]),
-            (k[2], j[2]),
-            (h, j[2]),
-            (j[0], j[1]),
-            (j[1], h),
-            (j[0], h),
-        )
-
-    def plates(self) -> tuple[tuple[str, ...], ...]:
-        return ((self.joints[0], self.joints[1], self.hinge),)
 
     def _turn(self, ctx: Context) -> tuple[Array, Array]:
         return ctx.scalar(self.phase) + ctx.theta, ctx.scalar(self.arm)
@@ -493,22 +510,6 @@ class BodyHingeTriad(PlaneTriadKind):
         worst: Array = np.maximum.reduce(np.broadcast_arrays(*errors))
         return worst
 
-    def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
-        j, k, h = self.joints, self.anchors, self.hinge
-        return (
-            f"the ternary link {j[0]}{j[1]}{h}, with {h}{j[2]} turned to the driven angle, cannot "
-            f"be held by its links {k[0]}{j[0]}, {k[1]}{j[1]} and {k[2]}{j[2]}: the triad has no "
-            "real pose"
-        )
-
-    def at_limit(self) -> str:
-        j = "".join(self.joints[:3])
-        return (
-            f"triad {j} driven at {self.hinge}: two poses merge (the ternary link, with "
-            f"{self.hinge}{self.joints[2]} held at the driven angle, cannot go on this way in "
-            "either)"
-        )
-
 
 def _body_axes(pos: Array, side: Array) -> tuple[Array, Array, Array]:
     """The spherical body's axes at a pose ``(..., 3, 3)``: J1, the tangent at J1 towards J2
@@ -522,7 +523,7 @@ def _body_axes(pos: Array, side: Array) -> tuple[Array, Array, Array]:
 
 
 @dataclass(frozen=True)
-class SphereBodyHingeTriad(SphereTriadKind):
+class SphereBodyHingeTriad(_BodyHinge, SphereTriadKind):
     """The spherical body hinge: a spherical triad whose ternary link carries the driven hinge
     H, at arc ``harc`` from J1 turned by ``hangle`` from the great circle J1→J2 (right-handed
     about +O·J1), and J3 at arc ``arm`` from H, at the angle ``phase + θ`` from the great
@@ -566,33 +567,11 @@ class SphereBodyHingeTriad(SphereTriadKind):
     pose: str = "pose"
     sense: float = 1.0
 
-    @property
-    def hinge(self) -> str:
-        return self.joints[3]
+    link = "arc"
 
     @property
     def body(self) -> tuple[Param, Param, Param]:
         return (self.side, self.harc, self.hangle)
-
-    @property
-    def title(self) -> str:
-        return f"triad {''.join(self.joints[:3])} driven at {self.hinge}"
-
-    def links(self) -> tuple[tuple[str, str], ...]:
-        """The three legs, the turning link H–J3 and the ternary's sides J1 J2 H."""
-        j, k, h = self.joints, self.anchors, self.hinge
-        return (
-            (k[0], j[0]),
-            (k[1], j[1]),
-            (k[2], j[2]),
-            (h, j[2]),
-            (j[0], j[1]),
-            (j[1], h),
-            (j[0], h),
-        )
-
-    def plates(self) -> tuple[tuple[str, ...], ...]:
-        return ((self.joints[0], self.joints[1], self.hinge),)
 
     def _local(self, ctx: Context) -> tuple[Array, Array, Array, Array]:
         """H and J3 in the body's frame (J1 = z, J2 in the x–z plane) and J3's first two
@@ -705,19 +684,3 @@ class SphereBodyHingeTriad(SphereTriadKind):
         )
         worst: Array = np.maximum.reduce(np.broadcast_arrays(*errors))
         return worst
-
-    def unassembled(self, positions: Positions | None = None, params: Params | None = None) -> str:
-        j, k, h = self.joints, self.anchors, self.hinge
-        return (
-            f"the ternary link {j[0]}{j[1]}{h}, with the arc {h}{j[2]} turned to the driven "
-            f"angle, cannot be held by its arcs {k[0]}{j[0]}, {k[1]}{j[1]} and {k[2]}{j[2]}: the "
-            "triad has no real pose"
-        )
-
-    def at_limit(self) -> str:
-        j = "".join(self.joints[:3])
-        return (
-            f"triad {j} driven at {self.hinge}: two poses merge (the ternary link, with "
-            f"{self.hinge}{self.joints[2]} held at the driven angle, cannot go on this way in "
-            "either)"
-        )
