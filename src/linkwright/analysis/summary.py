@@ -9,7 +9,7 @@ with paper 002's locking for a geared five-bar and paper 004's ellipse for a dou
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -46,12 +46,12 @@ from linkwright.geometry import plane, sphere
 from linkwright.mechanisms import (
     DoubleSlider,
     FourBar,
-    GearedFiveBar,
     SliderCrank,
     SphericalFourBar,
     input_range,
 )
 from linkwright.mechanisms.base import Mechanism, circuit
+from linkwright.mechanisms.registry import family_of
 
 __all__ = ["analyze", "general_analysis"]
 
@@ -110,29 +110,32 @@ def analyze(mechanism: Mechanism, mu: float | None = None) -> Analysis:
     """
     if mechanism.batch_shape != ():
         raise ValueError("analyze reports on one mechanism; index the batch first")
-    if isinstance(mechanism, SphericalFourBar):
-        return _spherical(mechanism, mu)
+    # What a family reports beyond its plan's general analysis is its registry entry's word.
+    closed_form = family_of(mechanism).analysis
+    if closed_form == "spherical-fourbar":
+        return _spherical(cast(SphericalFourBar, mechanism), mu)
     if mu is not None:
         raise InvalidHingeRatio(
             f"mu: the hinge-radius ratio applies to a spherical four-bar, not to a "
             f"{mechanism.family}"
         )
-    if isinstance(mechanism, FourBar):
-        ref = float(mechanism.frame_angle)
-        cls = str(fourbar_class(mechanism))
-    elif isinstance(mechanism, SliderCrank):
-        ref = float(mechanism.line_angle)
-        cls = str(slidercrank_class(mechanism))
-    else:
+    if closed_form not in ("fourbar", "slidercrank"):
         return general_analysis(mechanism)
-    is_fourbar = isinstance(mechanism, FourBar)
+    is_fourbar = closed_form == "fourbar"
+    planar = cast(FourBar | SliderCrank, mechanism)
+    if isinstance(planar, FourBar):  # for the type checker: the registry has said which
+        ref = float(planar.frame_angle)
+        cls = str(fourbar_class(planar))
+    else:
+        ref = float(planar.line_angle)
+        cls = str(slidercrank_class(planar))
     arcs = input_range(mechanism)
     never = bool(arcs.never)
-    grashof_ratio = finite(grashof(mechanism)) if isinstance(mechanism, FourBar) else None
+    grashof_ratio = finite(grashof(planar)) if isinstance(planar, FourBar) else None
     if never:
         return FourBarAnalysis(
             family=mechanism.family, kind=None, assembles=False,
-            reason=_never_reason(mechanism), reference_angle=ref, grashof=grashof_ratio,
+            reason=_never_reason(planar), reference_angle=ref, grashof=grashof_ratio,
             grashof_terms=None, input_full=False, input_arcs=(), output_range=None,
             slider_range=None, transmission=None, pressure=None, time_ratio=None,
             coefficients=Coefficients.of(None),
@@ -343,14 +346,15 @@ def general_analysis(mechanism: Mechanism, *, samples: int = REPORT_SAMPLES) -> 
                 finite(length), _extreme(speed, False), _extreme(speed, True)
             )
     locking = ellipse = None
-    if isinstance(mechanism, GearedFiveBar):
+    extra = family_of(mechanism).analysis
+    if extra == "locking":
         locking = Locking(
             oscillates=not never and not bool(arcs.full),
             locking_positions=tuple(limit.input for limit in limits),
             repeats_after_turns=turns,
         )
-    if isinstance(mechanism, DoubleSlider):
-        coeffs = doubleslider_conic(mechanism)
+    if extra == "ellipse":
+        coeffs = doubleslider_conic(cast(DoubleSlider, mechanism))
         axes = ellipse_axes(coeffs)
         ellipse = Ellipse(
             center=(finite(axes["center"][0]), finite(axes["center"][1])),

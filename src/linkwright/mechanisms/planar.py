@@ -469,6 +469,7 @@ register(
         distinct=FRAME_DISTINCT,
         joints=FOURBAR_JOINTS,
         source="papers 002 and 003 (the four-bar of their analyses)",
+        analysis="fourbar",
     )
 )
 register(
@@ -489,6 +490,7 @@ register(
         ),
         joints=(("A0", "crank pivot"), ("A", "crank pin"), ("B", "slider"), ("P", "traced point")),
         source="paper 003 (its slider-crank tables)",
+        analysis="slidercrank",
     )
 )
 # A0 and B0 may coincide: two cranks on one axis still make a five-bar.
@@ -522,6 +524,7 @@ register(
             ("P", "traced point"),
         ),
         source="paper 002 (Abhyankar & Gajjal)",
+        analysis="locking",
     )
 )
 register(
@@ -547,5 +550,6 @@ register(
             ("P", "traced point"),
         ),
         source="paper 004 (Kiper, Akbalçık, Şen)",
+        analysis="ellipse",
     )
 )

@@ -120,6 +120,11 @@ class Family:
     distinct : (field, other field, why) for points that may not coincide.
     joints : each joint and what it is (the source paper's letter where there is one).
     source : where the family comes from (a seed paper, a textbook).
+    analysis : what :func:`linkwright.analysis.analyze` reports beyond what every plan gives
+        (circuits, limits, transmission angles of its dyads, traced paths): paper 003's
+        closed-form four-bar analysis (``"fourbar"``, ``"slidercrank"``,
+        ``"spherical-fourbar"``), the geared five-bar's locking (``"locking"``), the double
+        slider's ellipse (``"ellipse"``), or nothing more (``""``).
     """
 
     name: str
@@ -133,6 +138,7 @@ class Family:
     joints: tuple[tuple[str, str], ...] = ()
     source: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    analysis: str = ""
 
     @property
     def names(self) -> tuple[str, ...]:

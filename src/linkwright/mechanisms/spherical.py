@@ -524,6 +524,7 @@ register(
             ("P", "traced coupler point (paper 000's C)"),
         ),
         source="papers 000 (Özçelik & Şaka) and 003",
+        analysis="spherical-fourbar",
     )
 )
 # Paper 000, Fig. 8: the four-bar's coupler point is C, where link5 (CE) hangs; E0 sits at
