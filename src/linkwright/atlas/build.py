@@ -348,13 +348,15 @@ def _build_locked(
 
     blocks = store.shard_descriptors(root, len(sizes))
     index = Index.build(blocks)
-    queries = describe_variants(
-        family,
-        curves(family, query_designs(spec), spec.samples, spec.mechanism),
-        spec.harmonics,
-        spec.mechanism,
-    )
-    recall = index.tune(blocks, queries.reshape(-1, queries.shape[-1]), queries.shape[-2])
+    recall = 1.0  # an exact index finds every neighbour: no queries to tune it on
+    if index.kind != "exact":
+        queries = describe_variants(
+            family,
+            curves(family, query_designs(spec), spec.samples, spec.mechanism),
+            spec.harmonics,
+            spec.mechanism,
+        )
+        recall = index.tune(blocks, queries.reshape(-1, queries.shape[-1]), queries.shape[-2])
     index.save(root / store.INDEX)
     t_all = time.perf_counter() - t0
     if progress:
@@ -370,7 +372,7 @@ def _build_locked(
             "nprobe": index.nprobe,
             "storage": index.storage,
             "recall_at_10": recall,
-            "tuning_queries": TUNING_QUERIES,
+            "tuning_queries": 0 if index.kind == "exact" else TUNING_QUERIES,
             # What `atlas info` and `query` check the index file against.
             **_index_file(root / store.INDEX),
         },

@@ -113,9 +113,13 @@ def _atlas_summary(path: Path, manifest: Mapping[str, Any]) -> str:
     return (
         f"{path}: {spec['count']} {spec['family']} curves (seed {spec['seed']}) in "
         f"{len(manifest['shards'])} shards, {figures['bytes'] / 1e6:.1f} MB\n"
-        f"index: {index['kind']}{probe}; recall@10 against exact search "
-        f"{index['recall_at_10']:.3f} on {index['tuning_queries']} held-out curves\n"
-        f"built {figures['curves_computed']} curves in {figures['seconds_shards']:.1f} s "
+        + (
+            f"index: {index['kind']}{probe}; recall@10 against exact search "
+            f"{index['recall_at_10']:.3f} on {index['tuning_queries']} held-out curves\n"
+            if index["tuning_queries"]
+            else f"index: {index['kind']} (every neighbour found: nothing to tune)\n"
+        )
+        + f"built {figures['curves_computed']} curves in {figures['seconds_shards']:.1f} s "
         f"({rate:.3g} curves/s), {figures['seconds_total']:.1f} s with the index; "
         f"{figures['shards_resumed']} shards resumed\n"
     )

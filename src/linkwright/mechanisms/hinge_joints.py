@@ -25,14 +25,27 @@ linkage's one input, as a driven hinge is; ``pose`` is the triad's pose index.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
 
 from numpy.typing import ArrayLike
 
+from linkwright.engine.hinge_triad_steps import (
+    BodyHingeTriad,
+    LegHingeTriad,
+    SphereBodyHingeTriad,
+    SphereLegHingeTriad,
+)
+from linkwright.engine.state import Step
 from linkwright.mechanisms.joint_base import TriadSpec
 
+Key = Callable[[str], str]
+"""A linkage's name for one of a joint's numbers (``key("a")`` is ``"A.a"``), which it records
+as a plan parameter."""
+
 __all__ = [
+    "HINGED_TRIADS",
     "HingeTriadJoint",
     "SphereHingeTriadJoint",
     "SphereTurningTriadJoint",
@@ -46,9 +59,18 @@ class _HingedTriad(TriadSpec):
     hinge: str
 
     @property
-    def placed(self) -> tuple[str, ...]:
+    def placed(self) -> tuple[str, str, str, str]:
         """The joints it places: J1 (its name), J2, J3 and the hinge."""
         return (self.name, self.j2, self.j3, self.hinge)
+
+    @property
+    def anchors(self) -> tuple[str, str, str]:
+        """The placed joints it hangs from: p1, p2, p3."""
+        return (self.p1, self.p2, self.p3)
+
+    def step(self, key: Key) -> Step:
+        """The plan step that places its joints, its numbers named by ``key``."""
+        raise NotImplementedError
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,6 +117,10 @@ class HingeTriadJoint(_HingedTriad):
 
     type: ClassVar[str] = "hinge-triad"
 
+    def step(self, key: Key) -> Step:
+        body = (key("side"), key("u"), key("v"), key("a"), key("b"), key("phase"))
+        return LegHingeTriad(self.placed, self.anchors, (key("r1"), key("r2")), *body, key("pose"))
+
 
 @dataclass(frozen=True, eq=False)
 class SphereHingeTriadJoint(_HingedTriad):
@@ -121,6 +147,11 @@ class SphereHingeTriadJoint(_HingedTriad):
     pose: ArrayLike = 0.0
 
     type: ClassVar[str] = "hinge-triad"
+
+    def step(self, key: Key) -> Step:
+        body = (key("side"), key("arc"), key("angle"), key("a"), key("b"), key("phase"))
+        legs = (key("r1"), key("r2"))
+        return SphereLegHingeTriad(self.placed, self.anchors, legs, *body, key("pose"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -164,6 +195,11 @@ class TurningTriadJoint(_HingedTriad):
 
     type: ClassVar[str] = "turning-triad"
 
+    def step(self, key: Key) -> Step:
+        body = (key("side"), key("hu"), key("hv"), key("arm"), key("phase"))
+        legs = (key("r1"), key("r2"), key("r3"))
+        return BodyHingeTriad(self.placed, self.anchors, legs, *body, key("pose"))
+
 
 @dataclass(frozen=True, eq=False)
 class SphereTurningTriadJoint(_HingedTriad):
@@ -190,3 +226,17 @@ class SphereTurningTriadJoint(_HingedTriad):
     pose: ArrayLike = 0.0
 
     type: ClassVar[str] = "turning-triad"
+
+    def step(self, key: Key) -> Step:
+        body = (key("side"), key("harc"), key("hangle"), key("arm"), key("phase"))
+        legs = (key("r1"), key("r2"), key("r3"))
+        return SphereBodyHingeTriad(self.placed, self.anchors, legs, *body, key("pose"))
+
+
+HINGED_TRIADS = (
+    HingeTriadJoint,
+    SphereHingeTriadJoint,
+    TurningTriadJoint,
+    SphereTurningTriadJoint,
+)
+"""Every triad spec driven at a hinge: each the linkage's one input, in place of a crank."""

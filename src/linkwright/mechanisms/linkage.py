@@ -54,21 +54,10 @@ from linkwright.engine import (
 )
 from linkwright.engine.evaluate import batch_shape
 from linkwright.engine.hinge_steps import Hinge, SphereHinge
-from linkwright.engine.hinge_triad_steps import (
-    BodyHingeTriad,
-    LegHingeTriad,
-    SphereBodyHingeTriad,
-    SphereLegHingeTriad,
-)
 from linkwright.engine.triad_steps import SphereTriad, Triad
 from linkwright.geometry import plane, sphere
 from linkwright.mechanisms.base import Mechanism, family_dataclass
-from linkwright.mechanisms.hinge_joints import (
-    HingeTriadJoint,
-    SphereHingeTriadJoint,
-    SphereTurningTriadJoint,
-    TurningTriadJoint,
-)
+from linkwright.mechanisms.hinge_joints import HINGED_TRIADS
 from linkwright.mechanisms.joints import (
     ALL_SPECS,
     JOINT_TYPES,
@@ -126,13 +115,7 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-DRIVEN_HINGES = (
-    HingeJoint,
-    HingeTriadJoint,
-    SphereHingeTriadJoint,
-    TurningTriadJoint,
-    SphereTurningTriadJoint,
-)
+DRIVEN_HINGES = (HingeJoint, *HINGED_TRIADS)
 """The specs that drive the linkage at a moving hinge (its one input, in place of a crank)."""
 
 # --------------------------------------------------------------------------------------------
@@ -745,38 +728,8 @@ def _compile(
             steps.append(
                 kind(n, j.far, j.z, key("r"), j.y, key("a"), key("b"), key("phase"), f"{n}.pose")
             )
-        elif isinstance(j, HingeTriadJoint):
-            steps.append(
-                LegHingeTriad(
-                    (n, j.j2, j.j3, j.hinge), (j.p1, j.p2, j.p3), (key("r1"), key("r2")),
-                    key("side"), key("u"), key("v"), key("a"), key("b"), key("phase"),
-                    key("pose"),
-                )
-            )  # fmt: skip
-        elif isinstance(j, SphereHingeTriadJoint):
-            steps.append(
-                SphereLegHingeTriad(
-                    (n, j.j2, j.j3, j.hinge), (j.p1, j.p2, j.p3), (key("r1"), key("r2")),
-                    key("side"), key("arc"), key("angle"), key("a"), key("b"), key("phase"),
-                    key("pose"),
-                )
-            )  # fmt: skip
-        elif isinstance(j, TurningTriadJoint):
-            steps.append(
-                BodyHingeTriad(
-                    (n, j.j2, j.j3, j.hinge), (j.p1, j.p2, j.p3),
-                    (key("r1"), key("r2"), key("r3")), key("side"), key("hu"), key("hv"),
-                    key("arm"), key("phase"), key("pose"),
-                )
-            )  # fmt: skip
-        elif isinstance(j, SphereTurningTriadJoint):
-            steps.append(
-                SphereBodyHingeTriad(
-                    (n, j.j2, j.j3, j.hinge), (j.p1, j.p2, j.p3),
-                    (key("r1"), key("r2"), key("r3")), key("side"), key("harc"), key("hangle"),
-                    key("arm"), key("phase"), key("pose"),
-                )
-            )  # fmt: skip
+        elif isinstance(j, HINGED_TRIADS):
+            steps.append(j.step(key))
         elif isinstance(j, TriadJoint | SphereTriadJoint):
             placed = (n, j.j2, j.j3)
             anchors = (j.p1, j.p2, j.p3)
