@@ -117,7 +117,8 @@ def _atlas_summary(path: Path, manifest: Mapping[str, Any]) -> str:
             f"index: {index['kind']}{probe}; recall@10 against exact search "
             f"{index['recall_at_10']:.3f} on {index['tuning_queries']} held-out curves\n"
             if index["tuning_queries"]
-            else f"index: {index['kind']} (every neighbour found: nothing to tune)\n"
+            else f"index: {index['kind']}; recall@10 1 (an exact search finds every neighbour: "
+            "nothing to tune)\n"
         )
         + f"built {figures['curves_computed']} curves in {figures['seconds_shards']:.1f} s "
         f"({rate:.3g} curves/s), {figures['seconds_total']:.1f} s with the index; "
